@@ -1,0 +1,34 @@
+"""seds_casadi: learning to play minigolf with stable dynamical systems (SEDS in CasADi/IPOPT).
+
+Reference implementation of Khansari-Zadeh, Kronander and Billard, "Learning to Play Minigolf:
+A Dynamical System-based Approach" (Advanced Robotics, 2012), and of SEDS in Python.
+"""
+
+from .demonstrations import Demonstrations, load_demonstrations, save_demonstrations
+from .errors import (
+    ConvergenceWarning,
+    ModelFileError,
+    SEDSError,
+    SolverError,
+    StabilityError,
+)
+from .seds import SEDS, SEDSProblem
+from .stable_ds import StableDS, certify
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "Demonstrations",
+    "load_demonstrations",
+    "save_demonstrations",
+    "SEDS",
+    "SEDSProblem",
+    "StableDS",
+    "certify",
+    "SEDSError",
+    "SolverError",
+    "StabilityError",
+    "ModelFileError",
+    "ConvergenceWarning",
+    "__version__",
+]

@@ -1,0 +1,393 @@
+"""Demonstrations: validation, preprocessing as SEDS does it, and file formats.
+
+Preprocessing (as in the original SEDS package, ``preprocess_demos``):
+
+1. optional smoothing of the positions (centred moving average),
+2. velocities by finite differences (second order, from a time step or time stamps) unless given,
+3. trimming of leading and trailing standstill samples (speed below a threshold),
+4. the target x* as the mean of the end points (or given), and the data shifted so the target is
+   the origin. When the target is not given, each demonstration is shifted by its own end point
+   (SEDS's choice), so every demonstration ends exactly at the attractor.
+
+File formats
+------------
+``.npz`` (read with ``allow_pickle=False``): arrays ``pos_0``, ``pos_1``, ... of shape (T_n, d);
+optional ``vel_n`` of the same shapes, ``t_n`` of shape (T_n,), a scalar ``dt`` and ``target`` of
+shape (d,).
+
+``.csv``: a header row, then one row per sample. Columns ``demo`` (an integer id; rows of one
+demonstration are contiguous and in time order), ``t`` (time stamp, seconds), ``x0 .. x{d-1}``
+(positions) and optionally ``v0 .. v{d-1}`` (velocities). Lines starting with ``#`` are comments.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.ndimage import uniform_filter1d
+
+__all__ = ["Demonstrations", "load_demonstrations", "save_demonstrations"]
+
+
+def _as_demo_list(arrays, what: str) -> list[np.ndarray]:
+    if isinstance(arrays, np.ndarray):
+        if arrays.ndim == 2:
+            arrays = [arrays]
+        elif arrays.ndim == 3:
+            arrays = list(arrays)
+        else:
+            raise ValueError(
+                f"{what}: expected a list of arrays of shape (T_n, d), a (T, d) array or an "
+                f"(N, T, d) array; got an array of shape {arrays.shape}"
+            )
+    if not isinstance(arrays, Sequence) or isinstance(arrays, (str, bytes)):
+        raise TypeError(f"{what}: expected a list of arrays of shape (T_n, d), got {type(arrays)}")
+    if len(arrays) == 0:
+        raise ValueError(f"{what}: the set of demonstrations is empty; give at least one")
+    out = []
+    for n, a in enumerate(arrays):
+        try:
+            a = np.asarray(a, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise TypeError(f"{what}[{n}]: not a numeric array ({exc})") from None
+        if a.ndim == 1:
+            a = a[:, None]
+        if a.ndim != 2:
+            raise ValueError(f"{what}[{n}]: expected shape (T_n, d), got {a.shape}")
+        if not np.all(np.isfinite(a)):
+            bad = int(np.argwhere(~np.isfinite(a))[0, 0])
+            raise ValueError(
+                f"{what}[{n}]: contains NaN or infinite values (first at sample {bad}); "
+                "remove or interpolate those samples"
+            )
+        out.append(a)
+    return out
+
+
+@dataclass(frozen=True)
+class _Processed:
+    positions: list
+    velocities: list
+    target: np.ndarray
+    shifts: list
+
+
+class Demonstrations:
+    """A set of N demonstrations of a d-dimensional motion, preprocessed as SEDS does.
+
+    Parameters
+    ----------
+    positions : list of array, each shape (T_n, d)
+        Positions of each demonstration, in time order (T_n may differ between demonstrations).
+        An (N, T, d) array is accepted too.
+    velocities : list of array, each shape (T_n, d), optional
+        Velocities; derived by finite differences from ``dt`` or ``times`` when not given.
+    dt : float, optional
+        Constant time step [s] between samples.
+    times : list of array, each shape (T_n,), optional
+        Time stamps [s] of each sample (strictly increasing).
+    target : array, shape (d,), optional
+        The attractor x*. Default: the mean of the demonstrations' end points.
+    smoothing : int, default 0
+        Width (samples) of a centred moving average applied to the positions before
+        differentiation; 0 or 1 for none. Ignored when velocities are given.
+    trim_speed : float, optional
+        Leading and trailing samples slower than this are trimmed (SEDS's ``tol_cutting``).
+        Default: 1e-3 times the fastest speed in the set. Use 0 to keep every sample.
+    shift_each : bool, default True
+        When ``target`` is not given, shift each demonstration by its own end point so that all
+        end exactly at the attractor (as SEDS does). With False, all are shifted by x* only.
+
+    Attributes
+    ----------
+    positions : list of array, shape (T_n, d)
+        Trimmed positions in the caller's coordinates.
+    velocities : list of array, shape (T_n, d)
+    target : array, shape (d,)
+    shifted_positions : list of array, shape (T_n, d)
+        Positions in the attractor frame (x* at the origin) used for learning.
+    """
+
+    def __init__(
+        self,
+        positions,
+        velocities=None,
+        dt: float | None = None,
+        times=None,
+        target=None,
+        smoothing: int = 0,
+        trim_speed: float | None = None,
+        shift_each: bool = True,
+    ) -> None:
+        pos = _as_demo_list(positions, "positions")
+        d = pos[0].shape[1]
+        for n, p in enumerate(pos):
+            if p.shape[1] != d:
+                raise ValueError(
+                    f"positions[{n}] has {p.shape[1]} dimensions but positions[0] has {d}; "
+                    "all demonstrations must have the same dimension"
+                )
+            if p.shape[0] < 2:
+                raise ValueError(
+                    f"positions[{n}] has {p.shape[0]} sample(s); a demonstration needs at least 2"
+                )
+        self.dt: float | None = None
+        if velocities is not None:
+            vel = _as_demo_list(velocities, "velocities")
+            if len(vel) != len(pos):
+                raise ValueError(
+                    f"{len(vel)} velocity arrays for {len(pos)} demonstrations; give one per demo"
+                )
+            for n, (p, v) in enumerate(zip(pos, vel)):
+                if v.shape != p.shape:
+                    raise ValueError(
+                        f"velocities[{n}] has shape {v.shape} but positions[{n}] has {p.shape}"
+                    )
+            if dt is not None:
+                self.dt = self._check_dt(dt)
+        else:
+            if smoothing and int(smoothing) > 1:
+                pos = [uniform_filter1d(p, size=int(smoothing), axis=0, mode="nearest") for p in pos]
+            if times is not None:
+                tl = _as_demo_list(times, "times")
+                vel = []
+                for n, (p, t) in enumerate(zip(pos, tl)):
+                    t = t.ravel()
+                    if t.shape[0] != p.shape[0]:
+                        raise ValueError(
+                            f"times[{n}] has {t.shape[0]} stamps for {p.shape[0]} positions"
+                        )
+                    if np.any(np.diff(t) <= 0):
+                        raise ValueError(f"times[{n}] must be strictly increasing")
+                    vel.append(np.gradient(p, t, axis=0))
+                if len(tl) != len(pos):
+                    raise ValueError(f"{len(tl)} time arrays for {len(pos)} demonstrations")
+            elif dt is not None:
+                self.dt = self._check_dt(dt)
+                vel = [np.gradient(p, self.dt, axis=0) for p in pos]
+            else:
+                raise ValueError(
+                    "velocities are not given: pass velocities=, dt= (time step) or times= "
+                    "(time stamps) so they can be derived by finite differences"
+                )
+        speeds = [np.linalg.norm(v, axis=1) for v in vel]
+        vmax = max(float(s.max()) for s in speeds)
+        if not vmax > 0.0:
+            raise ValueError(
+                "the demonstrations never move (all velocities are zero); "
+                "there is no motion to learn"
+            )
+        thr = 1e-3 * vmax if trim_speed is None else float(trim_speed)
+        if not np.isfinite(thr) or thr < 0:
+            raise ValueError(f"trim_speed must be a finite number >= 0, got {trim_speed}")
+        tp, tv = [], []
+        for n, (p, v, s) in enumerate(zip(pos, vel, speeds)):
+            moving = np.flatnonzero(s > thr)
+            if moving.size == 0:
+                raise ValueError(
+                    f"demonstration {n} never moves faster than {thr:.3g} (trim_speed); "
+                    "remove it or lower trim_speed"
+                )
+            lo, hi = moving[0], min(moving[-1] + 1, len(p) - 1)
+            if hi - lo + 1 < 2:
+                raise ValueError(
+                    f"demonstration {n} keeps fewer than 2 samples after trimming standstill"
+                )
+            tp.append(p[lo : hi + 1].copy())
+            tv.append(v[lo : hi + 1].copy())
+        if target is not None:
+            tgt = np.asarray(target, dtype=float).ravel()
+            if tgt.shape != (d,) or not np.all(np.isfinite(tgt)):
+                raise ValueError(f"target must be a finite array of shape ({d},), got {target!r}")
+            shifts = [tgt for _ in tp]
+        else:
+            tgt = np.mean([p[-1] for p in tp], axis=0)
+            shifts = [p[-1] if shift_each else tgt for p in tp]
+        self._set(tp, tv, tgt, shifts)
+
+    @staticmethod
+    def _check_dt(dt) -> float:
+        dt = float(dt)
+        if not (np.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt must be a positive finite time step, got {dt}")
+        return dt
+
+    def _set(self, positions, velocities, target, shifts) -> None:
+        self.positions = positions
+        self.velocities = velocities
+        self.target = np.asarray(target, dtype=float)
+        self._shifts = [np.asarray(s, dtype=float) for s in shifts]
+        self.shifted_positions = [p - s for p, s in zip(positions, self._shifts)]
+
+    @classmethod
+    def _from_processed(cls, positions, velocities, target, shifts, dt) -> Demonstrations:
+        obj = cls.__new__(cls)
+        obj.dt = dt
+        obj._set(positions, velocities, target, shifts)
+        return obj
+
+    # ------------------------------------------------------------------ views
+    @property
+    def n_demos(self) -> int:
+        """Number of demonstrations N."""
+        return len(self.positions)
+
+    @property
+    def n_dims(self) -> int:
+        """Dimension d of the state."""
+        return int(self.positions[0].shape[1])
+
+    @property
+    def n_samples(self) -> int:
+        """Total number of samples over all demonstrations."""
+        return int(sum(len(p) for p in self.positions))
+
+    def stacked(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """All samples stacked, in the attractor frame.
+
+        Returns
+        -------
+        X : array, shape (n_samples, d)
+            Positions relative to the target (x - x*).
+        Xdot : array, shape (n_samples, d)
+        phase : array, shape (n_samples,)
+            t / T^n in [0, 1] within each demonstration (the weights of Eq. 11 use it).
+        demo : array of int, shape (n_samples,)
+        """
+        X = np.concatenate(self.shifted_positions)
+        Xd = np.concatenate(self.velocities)
+        phase = np.concatenate([np.linspace(0.0, 1.0, len(p)) for p in self.positions])
+        demo = np.concatenate([np.full(len(p), n) for n, p in enumerate(self.positions)])
+        return X, Xd, phase, demo
+
+    def subsample(self, n_per_demo: int) -> Demonstrations:
+        """A new set with about ``n_per_demo`` evenly spaced samples per demonstration.
+
+        The first and last samples are always kept. Demonstrations shorter than that are kept whole.
+        """
+        n_per_demo = int(n_per_demo)
+        if n_per_demo < 2:
+            raise ValueError(f"n_per_demo must be at least 2, got {n_per_demo}")
+        pos, vel = [], []
+        for p, v in zip(self.positions, self.velocities):
+            idx = np.unique(np.round(np.linspace(0, len(p) - 1, n_per_demo)).astype(int))
+            pos.append(p[idx])
+            vel.append(v[idx])
+        dt = None
+        return Demonstrations._from_processed(pos, vel, self.target, self._shifts, dt)
+
+    def select(self, indices) -> Demonstrations:
+        """A new set holding only the demonstrations at ``indices`` (same target)."""
+        idx = [int(i) for i in np.atleast_1d(indices)]
+        if not idx:
+            raise ValueError("select: no demonstration indices given")
+        for i in idx:
+            if not 0 <= i < self.n_demos:
+                raise ValueError(f"select: index {i} out of range for {self.n_demos} demonstrations")
+        return Demonstrations._from_processed(
+            [self.positions[i] for i in idx],
+            [self.velocities[i] for i in idx],
+            self.target,
+            [self._shifts[i] for i in idx],
+            self.dt,
+        )
+
+    def __repr__(self) -> str:
+        lens = [len(p) for p in self.positions]
+        return f"Demonstrations(n_demos={self.n_demos}, n_dims={self.n_dims}, samples={lens})"
+
+
+# ---------------------------------------------------------------------- files
+def load_demonstrations(path: str | os.PathLike, **kwargs) -> Demonstrations:
+    """Read demonstrations from a ``.npz`` or ``.csv`` file (formats in the module docstring).
+
+    Parameters
+    ----------
+    path : str or path-like
+    **kwargs
+        Passed to :class:`Demonstrations` (``smoothing``, ``trim_speed``, ``target``, ...).
+    """
+    path = os.fspath(path)
+    if not os.path.exists(path):
+        raise FileNotFoundError(f"no demonstrations file at {path!r}")
+    ext = os.path.splitext(path)[1].lower()
+    if ext == ".npz":
+        try:
+            with np.load(path, allow_pickle=False) as f:
+                data = {k: f[k] for k in f.files}
+        except Exception as exc:  # noqa: BLE001 - any reader failure is a bad file
+            raise ValueError(f"{path}: not a readable .npz file ({exc})") from None
+        n = 0
+        pos, vel, tim = [], [], []
+        while f"pos_{n}" in data:
+            pos.append(data[f"pos_{n}"])
+            if f"vel_{n}" in data:
+                vel.append(data[f"vel_{n}"])
+            if f"t_{n}" in data:
+                tim.append(data[f"t_{n}"])
+            n += 1
+        if n == 0:
+            raise ValueError(f"{path}: no arrays named pos_0, pos_1, ... (see the documented format)")
+        kw = dict(kwargs)
+        if vel:
+            if len(vel) != n:
+                raise ValueError(f"{path}: vel_n given for some demonstrations only")
+            kw.setdefault("velocities", vel)
+        elif tim:
+            if len(tim) != n:
+                raise ValueError(f"{path}: t_n given for some demonstrations only")
+            kw.setdefault("times", tim)
+        if "dt" in data:
+            kw.setdefault("dt", float(data["dt"]))
+        if "target" in data:
+            kw.setdefault("target", data["target"])
+        return Demonstrations(pos, **kw)
+    if ext == ".csv":
+        with open(path, encoding="utf-8") as fh:
+            lines = [ln for ln in fh if ln.strip() and not ln.lstrip().startswith("#")]
+        if not lines:
+            raise ValueError(f"{path}: empty CSV file")
+        header = [h.strip() for h in lines[0].split(",")]
+        for col in ("demo", "t", "x0"):
+            if col not in header:
+                raise ValueError(
+                    f"{path}: missing column {col!r}; expected columns demo, t, x0..x{{d-1}} "
+                    "and optionally v0..v{d-1}"
+                )
+        try:
+            table = np.array([[float(c) for c in ln.split(",")] for ln in lines[1:]], ndmin=2)
+        except ValueError as exc:
+            raise ValueError(f"{path}: a row is not numeric ({exc})") from None
+        if table.size == 0:
+            raise ValueError(f"{path}: no data rows; the set of demonstrations is empty")
+        if table.shape[1] != len(header):
+            raise ValueError(f"{path}: rows have {table.shape[1]} values for {len(header)} columns")
+        xcols = [header.index(f"x{j}") for j in range(len(header)) if f"x{j}" in header]
+        vcols = [header.index(f"v{j}") for j in range(len(header)) if f"v{j}" in header]
+        if vcols and len(vcols) != len(xcols):
+            raise ValueError(f"{path}: {len(vcols)} velocity columns for {len(xcols)} positions")
+        demo_ids = table[:, header.index("demo")]
+        starts = np.flatnonzero(np.r_[True, np.diff(demo_ids) != 0])
+        ends = np.r_[starts[1:], len(table)]
+        pos = [table[s:e][:, xcols] for s, e in zip(starts, ends)]
+        tim = [table[s:e, header.index("t")] for s, e in zip(starts, ends)]
+        kw = dict(kwargs)
+        if vcols:
+            kw.setdefault("velocities", [table[s:e][:, vcols] for s, e in zip(starts, ends)])
+        else:
+            kw.setdefault("times", tim)
+        return Demonstrations(pos, **kw)
+    raise ValueError(f"{path}: unknown demonstrations format {ext!r}; use .npz or .csv")
+
+
+def save_demonstrations(path: str | os.PathLike, demos: Demonstrations) -> None:
+    """Write demonstrations (positions and velocities, caller's coordinates) as ``.npz``."""
+    arrays = {}
+    for n, (p, v) in enumerate(zip(demos.positions, demos.velocities)):
+        arrays[f"pos_{n}"] = p
+        arrays[f"vel_{n}"] = v
+    arrays["target"] = demos.target
+    np.savez(path, **arrays)

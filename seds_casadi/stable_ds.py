@@ -1,0 +1,367 @@
+"""The fitted, certified stable dynamical system f(x) of paper Eq. 5-7.
+
+A :class:`StableDS` holds a GMM over the joint space (x, xdot) as plain arrays and evaluates
+
+    f(x) = sum_k h^k(x) (mu_xdot^k + Sigma_xdotx^k (Sigma_x^k)^-1 (x - mu_x^k))      (Eq. 5)
+
+with h^k the posterior weights of Eq. 6 (computed by log-sum-exp, so it is finite everywhere).
+Every StableDS is certified against Eq. 10 when it is made (fitted, constructed or loaded).
+
+Saved-model format (``.npz``, read with ``allow_pickle=False``)
+----------------------------------------------------------------
+``format`` = "seds_casadi.StableDS", ``version`` = 1, ``priors`` (K,), ``means`` (K, 2d),
+``covariances`` (K, 2d, 2d), ``target`` (d,), ``fit_info`` (a JSON string) and ``checksum``: the
+SHA-256 of the float64 little-endian bytes of priors, means, covariances and target followed by the
+UTF-8 bytes of fit_info. ``load`` checks all of it and re-certifies stability.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import tempfile
+
+import casadi as ca
+import numpy as np
+
+from .errors import ModelFileError, StabilityError
+from .gmm import responsibilities
+
+__all__ = ["StableDS", "certify"]
+
+FORMAT = "seds_casadi.StableDS"
+VERSION = 1
+
+
+def certify(
+    priors: np.ndarray,
+    means: np.ndarray,
+    covariances: np.ndarray,
+    target: np.ndarray,
+    status: str = "unknown",
+    rtol: float = 1e-8,
+) -> dict[str, float]:
+    """Check the stability conditions of Eq. 10 numerically; raise if one fails.
+
+    Parameters
+    ----------
+    priors : array, shape (K,)
+    means : array, shape (K, 2d)
+    covariances : array, shape (K, 2d, 2d)
+    target : array, shape (d,)
+    status : str
+        Solver status to carry in the exception.
+    rtol : float
+        Relative tolerance for the equalities (e) and (a).
+
+    Returns
+    -------
+    dict
+        The margins: ``max_eig_sym_A`` (largest eigenvalue of any A_k + A_k^T, must be < 0),
+        ``min_eig_cov`` (smallest eigenvalue of any joint covariance, > 0), ``prior_sum_error``
+        and ``f_target_norm`` (||f(x*)||, relative to the velocity scale of the means).
+
+    Raises
+    ------
+    StabilityError
+        Naming the violated constraint.
+    """
+    K = len(priors)
+    d = len(target)
+    if not (np.all(np.isfinite(priors)) and np.all(np.isfinite(means))
+            and np.all(np.isfinite(covariances)) and np.all(np.isfinite(target))):
+        raise StabilityError("the model has non-finite parameters", "finite parameters", status)
+    # (d), (e)
+    if np.any(priors <= 0) or np.any(priors > 1 + 1e-12):
+        raise StabilityError(f"priors {priors} outside (0, 1]", "(d) 0 < pi_k <= 1", status)
+    psum = abs(float(np.sum(priors)) - 1.0)
+    if psum > 1e-9:
+        raise StabilityError(f"priors sum to {np.sum(priors)}", "(e) sum pi_k = 1", status)
+    # (c)
+    min_eig = np.inf
+    for k in range(K):
+        S = covariances[k]
+        if np.max(np.abs(S - S.T)) > 1e-9 * max(1.0, np.max(np.abs(S))):
+            raise StabilityError(f"covariance {k} is not symmetric", "(c) Sigma_k > 0", status)
+        ev = np.linalg.eigvalsh(S)
+        min_eig = min(min_eig, float(ev[0]))
+        if ev[0] <= 0:
+            raise StabilityError(
+                f"joint covariance {k} is not positive definite (smallest eigenvalue {ev[0]:.3g})",
+                "(c) Sigma_k > 0", status)
+    # (b)
+    max_eig = -np.inf
+    f_err = 0.0
+    for k in range(K):
+        Sx = covariances[k][:d, :d]
+        Sdx = covariances[k][d:, :d]
+        A = np.linalg.solve(Sx.T, Sdx.T).T
+        ev = np.linalg.eigvalsh(A + A.T)
+        max_eig = max(max_eig, float(ev[-1]))
+        if ev[-1] >= 0:
+            raise StabilityError(
+                f"component {k}: A_k + A_k^T has eigenvalue {ev[-1]:.3g} >= 0",
+                "(b) A_k + A_k^T < 0", status)
+        # (a): mu_xdot + A (x* - mu_x) = 0
+        resid = means[k, d:] + A @ (target - means[k, :d])
+        scale = max(np.linalg.norm(means[k, d:]), np.linalg.norm(A) * np.linalg.norm(
+            target - means[k, :d]), 1e-300)
+        f_err = max(f_err, float(np.linalg.norm(resid) / scale))
+        if np.linalg.norm(resid) > rtol * scale and np.linalg.norm(resid) > 1e-12:
+            raise StabilityError(
+                f"component {k}: its linear model does not vanish at the target "
+                f"(residual {np.linalg.norm(resid):.3g})", "(a) f(x*) = 0", status)
+    return {"max_eig_sym_A": max_eig, "min_eig_cov": min_eig, "prior_sum_error": psum,
+            "f_target_norm": f_err}
+
+
+class StableDS:
+    """A globally asymptotically stable GMM dynamical system (Eq. 5-7), certified by Eq. 10.
+
+    Parameters
+    ----------
+    priors : array, shape (K,)
+    means : array, shape (K, 2d)
+        Joint means (mu_x, mu_xdot) in the demonstrations' coordinates.
+    covariances : array, shape (K, 2d, 2d)
+        Joint covariances [[Sigma_x, Sigma_xxdot], [Sigma_xdotx, Sigma_xdot]].
+    target : array, shape (d,)
+        The attractor x*.
+    fit_info : dict, optional
+        Solver report (``status``, ``iterations``, ``objective``, ``seconds``, ...).
+    status : str
+        Status carried by a :class:`StabilityError` if the certificate fails.
+
+    Attributes
+    ----------
+    A : array, shape (K, d, d)
+        A_k = Sigma_xdotx^k (Sigma_x^k)^-1.
+    certificate : dict
+        Margins returned by :func:`certify`.
+    """
+
+    def __init__(self, priors, means, covariances, target, fit_info=None, status="constructed"):
+        self.priors = np.array(priors, dtype=float).ravel()
+        self.means = np.array(means, dtype=float)
+        self.covariances = np.array(covariances, dtype=float)
+        self.target = np.array(target, dtype=float).ravel()
+        K, d = len(self.priors), len(self.target)
+        if self.means.shape != (K, 2 * d) or self.covariances.shape != (K, 2 * d, 2 * d):
+            raise ValueError(
+                f"inconsistent shapes: priors {self.priors.shape}, means {self.means.shape}, "
+                f"covariances {self.covariances.shape}, target {self.target.shape}; expected "
+                f"({K},), ({K}, {2 * d}), ({K}, {2 * d}, {2 * d}), ({d},)"
+            )
+        self.certificate = certify(self.priors, self.means, self.covariances, self.target, status)
+        self.A = np.stack([
+            np.linalg.solve(self.covariances[k, :d, :d].T, self.covariances[k, d:, :d].T).T
+            for k in range(K)
+        ])
+        self.fit_info = dict(fit_info or {})
+
+    @property
+    def n_components(self) -> int:
+        """Number of Gaussians K."""
+        return len(self.priors)
+
+    @property
+    def n_dims(self) -> int:
+        """State dimension d."""
+        return len(self.target)
+
+    # ------------------------------------------------------------ evaluation
+    def _check_points(self, X, name="X") -> tuple[np.ndarray, bool]:
+        X = np.asarray(X, dtype=float)
+        single = X.ndim == 1
+        X2 = np.atleast_2d(X)
+        if X2.ndim != 2 or X2.shape[1] != self.n_dims:
+            raise ValueError(f"{name} must have shape (n, {self.n_dims}) or ({self.n_dims},), "
+                             f"got {X.shape}")
+        if not np.all(np.isfinite(X2)):
+            raise ValueError(f"{name} contains NaN or infinite values")
+        return X2, single
+
+    def predict(self, X) -> np.ndarray:
+        """Velocity f(x) of Eq. 5 at each point.
+
+        Parameters
+        ----------
+        X : array, shape (n, d) or (d,)
+
+        Returns
+        -------
+        array, same shape as X
+        """
+        X2, single = self._check_points(X)
+        d = self.n_dims
+        h = responsibilities(X2, self.priors, self.means[:, :d], self.covariances[:, :d, :d])
+        lin = np.einsum("kij,nkj->nki", self.A, X2[:, None, :] - self.means[None, :, :d])
+        F = np.einsum("nk,nki->ni", h, lin + self.means[None, :, d:])
+        return F[0] if single else F
+
+    def rollout(self, x0, dt: float, max_steps: int = 20000, tol: float | None = None,
+                method: str = "rk4") -> np.ndarray | list[np.ndarray]:
+        """Integrate xdot = f(x) from one or several starts until they reach the target.
+
+        Parameters
+        ----------
+        x0 : array, shape (d,) or (m, d)
+        dt : float
+            Time step [s].
+        max_steps : int
+            Upper bound on the steps.
+        tol : float, optional
+            Stop a trajectory once ||x - x*|| < tol. Default: 1e-3 times the largest start distance.
+        method : {"rk4", "euler"}
+
+        Returns
+        -------
+        array, shape (T, d) for one start, or a list of such arrays (each ends when it converged)
+        """
+        X, single = self._check_points(x0, "x0")
+        if not (np.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt must be positive, got {dt}")
+        if method not in ("rk4", "euler"):
+            raise ValueError(f"unknown method {method!r}; valid: rk4, euler")
+        dist0 = np.linalg.norm(X - self.target, axis=1)
+        if tol is None:
+            tol = 1e-3 * max(float(dist0.max()), 1e-12)
+        traj = [X.copy()]
+        done = dist0 < tol
+        end = np.where(done, 0, -1)
+        x = X.copy()
+        for step in range(1, int(max_steps) + 1):
+            if done.all():
+                break
+            a = ~done
+            xa = x[a]
+            if method == "euler":
+                xa = xa + dt * self.predict(xa)
+            else:
+                k1 = self.predict(xa)
+                k2 = self.predict(xa + 0.5 * dt * k1)
+                k3 = self.predict(xa + 0.5 * dt * k2)
+                k4 = self.predict(xa + dt * k3)
+                xa = xa + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+            x = x.copy()
+            x[a] = xa
+            traj.append(x)
+            newly = a & (np.linalg.norm(x - self.target, axis=1) < tol)
+            end[newly] = step
+            done |= newly
+        T = np.stack(traj)
+        outs = [T[: (e if e >= 0 else len(T) - 1) + 1, i] for i, e in enumerate(end)]
+        return outs[0] if single else outs
+
+    def to_casadi(self, name: str = "seds_f") -> ca.Function:
+        """A CasADi Function x (d,) -> f(x) (d,), for code generation or use in optimal control."""
+        d, K = self.n_dims, self.n_components
+        x = ca.SX.sym("x", d)
+        logp = []
+        lin = []
+        for k in range(K):
+            Sx = self.covariances[k, :d, :d]
+            Linv = np.linalg.inv(np.linalg.cholesky(Sx))
+            z = ca.DM(Linv) @ (x - ca.DM(self.means[k, :d]))
+            logdet = 2.0 * float(np.sum(np.log(np.diag(np.linalg.cholesky(Sx)))))
+            logp.append(np.log(self.priors[k]) - 0.5 * (ca.sumsqr(z) + logdet))
+            lin.append(ca.DM(self.means[k, d:]) + ca.DM(self.A[k]) @ (x - ca.DM(self.means[k, :d])))
+        m = logp[0]
+        for a in logp[1:]:
+            m = ca.fmax(m, a)
+        e = [ca.exp(a - m) for a in logp]
+        s = sum(e[1:], e[0])
+        f = sum((lin[k] * (e[k] / s) for k in range(1, K)), lin[0] * (e[0] / s))
+        return ca.Function(name, [x], [f], ["x"], ["xdot"])
+
+    # ------------------------------------------------------------ persistence
+    def _checksum(self, info_json: str) -> str:
+        h = hashlib.sha256()
+        for a in (self.priors, self.means, self.covariances, self.target):
+            h.update(np.ascontiguousarray(a, dtype="<f8").tobytes())
+        h.update(info_json.encode("utf-8"))
+        return h.hexdigest()
+
+    def save(self, path: str | os.PathLike) -> None:
+        """Write the model to ``path`` (``.npz``, format in the module docstring), atomically."""
+        path = os.fspath(path)
+        info_json = json.dumps(self.fit_info, sort_keys=True, default=_json_default)
+        arrays = {
+            "format": np.array(FORMAT), "version": np.array(VERSION),
+            "priors": self.priors, "means": self.means, "covariances": self.covariances,
+            "target": self.target, "fit_info": np.array(info_json),
+            "checksum": np.array(self._checksum(info_json)),
+        }
+        folder = os.path.dirname(os.path.abspath(path))
+        fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".npz", dir=folder)
+        try:
+            with os.fdopen(fd, "wb") as fh:
+                np.savez(fh, **arrays)
+            os.replace(tmp, path)
+        except BaseException:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
+            raise
+
+    @classmethod
+    def load(cls, path: str | os.PathLike) -> StableDS:
+        """Read a model written by :meth:`save`; verify its checksum and re-certify stability.
+
+        Raises
+        ------
+        ModelFileError
+            Unreadable, incomplete, corrupt or tampered file.
+        StabilityError
+            The stored parameters violate Eq. 10.
+        """
+        path = os.fspath(path)
+        try:
+            with np.load(path, allow_pickle=False) as f:
+                data = {k: f[k] for k in f.files}
+        except FileNotFoundError:
+            raise
+        except Exception as exc:  # noqa: BLE001 - any reader failure means a bad file
+            raise ModelFileError(f"{path}: not a readable model file ({exc})") from None
+        need = ("format", "version", "priors", "means", "covariances", "target", "fit_info",
+                "checksum")
+        missing = [k for k in need if k not in data]
+        if missing:
+            raise ModelFileError(f"{path}: missing entries {missing}; not a complete StableDS file")
+        if str(data["format"]) != FORMAT:
+            raise ModelFileError(f"{path}: format {str(data['format'])!r} is not {FORMAT!r}")
+        if int(data["version"]) != VERSION:
+            raise ModelFileError(f"{path}: version {int(data['version'])} is not supported "
+                                 f"(this library reads version {VERSION})")
+        for k in ("priors", "means", "covariances", "target"):
+            if data[k].dtype.kind != "f":
+                raise ModelFileError(f"{path}: entry {k!r} is not a float array")
+        info_json = str(data["fit_info"])
+        obj = cls.__new__(cls)
+        obj.priors, obj.means = data["priors"], data["means"]
+        obj.covariances, obj.target = data["covariances"], data["target"]
+        if obj._checksum(info_json) != str(data["checksum"]):
+            raise ModelFileError(f"{path}: checksum mismatch; the file is corrupt or was edited")
+        try:
+            info = json.loads(info_json)
+        except json.JSONDecodeError as exc:
+            raise ModelFileError(f"{path}: fit_info is not valid JSON ({exc})") from None
+        try:
+            return cls(data["priors"], data["means"], data["covariances"], data["target"],
+                       fit_info=info, status="loaded")
+        except StabilityError:
+            raise
+        except (ValueError, np.linalg.LinAlgError) as exc:
+            raise ModelFileError(f"{path}: inconsistent model arrays ({exc})") from None
+
+    def __repr__(self) -> str:
+        st = self.fit_info.get("status", "-")
+        return f"StableDS(n_components={self.n_components}, n_dims={self.n_dims}, status={st!r})"
+
+
+def _json_default(o):
+    if isinstance(o, np.generic):
+        return o.item()
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    raise TypeError(f"not JSON serialisable: {type(o)}")
