@@ -21,6 +21,7 @@ import numpy as np
 
 from .demonstrations import Demonstrations
 from .errors import ConvergenceWarning, SolverError
+from .gmm import responsibilities
 from .kernels import SumKernels
 from .parametrization import OBJECTIVES, Layout, unpack_numpy
 from .stable_ds import StableDS
@@ -87,11 +88,25 @@ class SEDSProblem:
     kernels: SumKernels = field(repr=False)
     objective_function: ca.Function = field(repr=False)
 
+    def speed_factor(self, theta: np.ndarray) -> float:
+        """Least-squares speed calibration c* = sum_i f_i . xdot_i / sum_i ||f_i||^2 (> 0).
+
+        The direction objective (Eq. 9) fixes f only up to a positive factor (scaling every A_k by
+        c > 0 changes neither the directions nor the stability). For the direction objective the
+        returned model is scaled by c*, the factor that best matches the demonstrated speeds, so
+        its reproductions and velocity errors are meaningful; h = f/||f|| (Eq. 8) is unchanged.
+        Returns 1 if the fit is so poor that c* would not be positive.
+        """
+        p = unpack_numpy(np.asarray(theta, dtype=float), self.layout, self.margin)
+        h = responsibilities(self.X, p["priors"], p["mu"], p["Sx"])
+        return _speed_factor(p["A"], h, self.X, self.Xd)
+
     def to_model_arrays(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Priors, means and joint covariances in the caller's coordinates for a given theta.
 
         Sigma_xdot = A Sigma_x A^T + Q with Q the optimised noise (likelihood) or the
-        responsibility-weighted residual covariance of the data (other objectives).
+        responsibility-weighted residual covariance of the data (other objectives). For the
+        direction objective the A_k are scaled by :meth:`speed_factor` first.
         """
         p = unpack_numpy(np.asarray(theta, dtype=float), self.layout, self.margin)
         K, d = self.layout.K, self.layout.d
@@ -99,9 +114,9 @@ class SEDSProblem:
         if "Q" in p:
             Q = p["Q"]
         else:
-            from .gmm import responsibilities
-
             h = responsibilities(self.X, p["priors"], p["mu"], p["Sx"])
+            if self.objective == "direction":
+                p["A"] = p["A"] * self.speed_factor(theta)
             Q = np.empty((K, d, d))
             for k in range(K):
                 r = self.Xd - self.X @ p["A"][k].T
@@ -121,6 +136,12 @@ class SEDSProblem:
             covs[k, d:, d:] = A @ Sx @ A.T + Q[k] * sv**2
             covs[k] = 0.5 * (covs[k] + covs[k].T)
         return p["priors"].copy(), means, covs
+
+
+def _speed_factor(A, h, X, Xd) -> float:
+    F = np.einsum("nk,kij,nj->ni", h, A, X)
+    num, den = float(np.sum(F * Xd)), float(np.sum(F * F))
+    return num / den if (num > 0 and den > 0) else 1.0
 
 
 def _initial_theta(
@@ -268,10 +289,12 @@ class SEDS:
         X, Xd, phase, _ = demos.stacked()
         d = X.shape[1]
         layout = Layout(self.n_components, d, with_noise=self.objective == "likelihood")
-        if X.shape[0] < max(layout.size, 2 * self.n_components):
+        # each sample gives d velocity equations; ask for at least one per parameter
+        if X.shape[0] * d < layout.size or X.shape[0] < 2 * self.n_components:
             raise ValueError(
                 f"{X.shape[0]} samples are too few for n_components={self.n_components} in "
-                f"{d}-D ({layout.size} parameters); use fewer components or more samples"
+                f"{d}-D ({layout.size} parameters, {X.shape[0] * d} velocity values); use fewer "
+                "components or more samples"
             )
         sx = float(np.sqrt(np.mean(np.sum(X**2, axis=1)) / d))
         sv = float(np.sqrt(np.mean(np.sum(Xd**2, axis=1)) / d))
@@ -374,6 +397,7 @@ class SEDS:
             "seconds": time.perf_counter() - t0,
             "seconds_solve": time.perf_counter() - t_built,
             "n_parameters": prob.layout.size,
+            "speed_factor": prob.speed_factor(theta) if self.objective == "direction" else 1.0,
             "n_components": self.n_components,
             "n_samples": int(prob.X.shape[0]),
             "hessian": self.hessian,

@@ -1,0 +1,7 @@
+"""``python -m seds_casadi``: the same command line as ``seds-casadi``."""
+
+import sys
+
+from .cli import main
+
+sys.exit(main())

@@ -1,0 +1,138 @@
+"""Command line: ``seds-casadi <command>`` (also ``python -m seds_casadi``).
+
+Commands
+--------
+fit     fit a stable DS to demonstrations in a .npz/.csv file; write the model and a figure
+lasa    run the LASA handwriting benchmark; write lasa.csv, summary.txt and figures
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import warnings
+
+__all__ = ["main", "build_parser"]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of ``seds-casadi``."""
+    from .datasets import LASA_SHAPES
+    from .lasa import PROTOCOLS
+    from .parametrization import OBJECTIVES
+
+    p = argparse.ArgumentParser(
+        prog="seds-casadi",
+        description="Learn stable dynamical systems (SEDS in CasADi/IPOPT) and play minigolf.",
+    )
+    sub = p.add_subparsers(dest="command", metavar="COMMAND")
+
+    f = sub.add_parser("fit", help="fit a stable DS to demonstrations from a .npz or .csv file",
+                       description="Fit SEDS to demonstrations (formats: see "
+                                   "seds_casadi.demonstrations) and write model.npz and "
+                                   "streamlines.png to --out.")
+    f.add_argument("demonstrations", help="path to a .npz or .csv demonstrations file")
+    f.add_argument("--components", "-K", type=int, default=5, help="number of Gaussians [5]")
+    f.add_argument("--objective", choices=OBJECTIVES, default="direction",
+                   help="objective [direction]")
+    f.add_argument("--dt", type=float, default=None,
+                   help="time step [s] if the file has neither velocities nor time stamps")
+    f.add_argument("--seed", type=int, default=0, help="random seed of the initialisation [0]")
+    f.add_argument("--max-iter", type=int, default=1000, help="IPOPT iteration limit [1000]")
+    f.add_argument("--out", default="seds_out", help="output folder [seds_out]")
+
+    la = sub.add_parser("lasa", help="run the LASA handwriting benchmark",
+                        description="Fit LASA shapes, score reproductions (RMSE, e_dot, DTW) "
+                                    "and write lasa.csv, summary.txt and figures to --out.")
+    la.add_argument("--shapes", nargs="+", default=None, metavar="SHAPE",
+                    help=f"shapes to run [all 30]; valid: {', '.join(LASA_SHAPES)}")
+    la.add_argument("--objectives", nargs="+", default=list(OBJECTIVES), choices=OBJECTIVES,
+                    help="objectives to compare [all three]")
+    la.add_argument("--protocols", nargs="+", default=list(PROTOCOLS), choices=PROTOCOLS,
+                    help="all: train and test on 7 demos; split: train 1-4, test 5-7 [both]")
+    la.add_argument("--components", "-K", type=int, default=5, help="number of Gaussians [5]")
+    la.add_argument("--samples", type=int, default=100,
+                    help="samples kept per demonstration [100]")
+    la.add_argument("--seed", type=int, default=0, help="random seed [0]")
+    la.add_argument("--workers", type=int, default=1, help="local worker processes [1]")
+    la.add_argument("--no-figures", action="store_true", help="skip the per-shape figures")
+    la.add_argument("--quick", action="store_true",
+                    help="a fast check: Angle, CShape and GShape, direction objective, "
+                         "protocol all")
+    la.add_argument("--out", default="lasa_out", help="output folder [lasa_out]")
+    return p
+
+
+def _cmd_fit(a) -> int:
+    from .demonstrations import load_demonstrations
+    from .plotting import _plt, plot_streamlines, save_figure
+    from .seds import SEDS
+
+    kw = {"dt": a.dt} if a.dt is not None else {}
+    demos = load_demonstrations(a.demonstrations, **kw)
+    print(f"loaded {demos}")
+    model = SEDS(a.components, objective=a.objective, random_state=a.seed,
+                 max_iter=a.max_iter).fit(demos)
+    os.makedirs(a.out, exist_ok=True)
+    path = os.path.join(a.out, "model.npz")
+    model.save(path)
+    starts = [p[0] for p in demos.positions]
+    span = max(float(max(abs(p - demos.target).max() for p in demos.positions)), 1e-9)
+    repro = model.rollout(starts, dt=_guess_dt(demos), tol=1e-3 * span, max_steps=20000)
+    fig, ax = _plt().subplots(figsize=(5.5, 5))
+    plot_streamlines(model, demos, repro, ax=ax,
+                     title=f"SEDS ({a.objective}, K={a.components})")
+    save_figure(fig, os.path.join(a.out, "streamlines.png"))
+    info = {k: model.fit_info[k] for k in ("status", "iterations", "objective", "seconds")}
+    print(json.dumps(info, indent=1))
+    print(f"wrote {path} and {os.path.join(a.out, 'streamlines.png')}")
+    return 0
+
+
+def _guess_dt(demos) -> float:
+    from .lasa import _demo_dt
+
+    return demos.dt or _demo_dt(demos)
+
+
+def _cmd_lasa(a) -> int:
+    from .lasa import run_lasa, summary_table
+
+    shapes, objectives, protocols = a.shapes, a.objectives, a.protocols
+    if a.quick:
+        shapes = shapes or ["Angle", "CShape", "GShape"]
+        objectives, protocols = ["direction"], ["all"]
+    results = run_lasa(shapes=shapes, objectives=objectives, protocols=protocols,
+                       n_components=a.components, n_samples=a.samples, random_state=a.seed,
+                       out_dir=a.out, figures=not a.no_figures, workers=a.workers)
+    print(summary_table(results))
+    print(f"wrote {os.path.join(a.out, 'lasa.csv')} and {os.path.join(a.out, 'summary.txt')}")
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of ``seds-casadi``; returns the exit code."""
+    parser = build_parser()
+    a = parser.parse_args(argv)
+    if a.command is None:
+        parser.print_help()
+        return 2
+    from .errors import ConvergenceWarning, SEDSError
+
+    warnings.simplefilter("always", ConvergenceWarning)
+    try:
+        if a.command == "fit":
+            return _cmd_fit(a)
+        if a.command == "lasa":
+            return _cmd_lasa(a)
+    except (ValueError, TypeError, FileNotFoundError, SEDSError) as exc:
+        print(f"seds-casadi {a.command}: error: {exc}", file=sys.stderr)
+        return 2
+    parser.error(f"unknown command {a.command}")
+    return 2
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

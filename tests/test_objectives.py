@@ -1,0 +1,113 @@
+"""The CasADi objective and its exact derivatives against an independent numpy implementation."""
+
+import casadi as ca
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from seds_casadi import SEDS
+from seds_casadi.kernels import SumKernels, unpack_casadi
+from seds_casadi.parametrization import OBJECTIVES, Layout, objective_numpy, unpack_numpy
+
+MARGIN = 1e-3
+
+
+def _data(seed, n=25, d=2):
+    rng = np.random.default_rng(seed)
+    X = rng.standard_normal((n, d))
+    Xd = -X + 0.3 * rng.standard_normal((n, d))
+    Xd[0] = 0.0  # a sample at rest must contribute 0 to the direction objective
+    w = rng.uniform(0.5, 2.0, n)
+    return X, Xd, w
+
+
+def _kernels(layout, objective, X, Xd, w, compile=False):
+    speed = np.linalg.norm(Xd, axis=1)
+    if objective == "direction":
+        coef = np.where(speed > 0, w / np.where(speed > 0, speed, 1), 0)
+        norm = w.sum()
+    else:
+        coef, norm = np.ones(len(X)), float(len(X))
+    return SumKernels(layout, objective, MARGIN, X, Xd, coef, norm, compile=compile)
+
+
+@pytest.mark.parametrize("objective", OBJECTIVES)
+@pytest.mark.parametrize("K,d", [(1, 2), (3, 2), (2, 3)])
+def test_casadi_objective_equals_numpy_reference(objective, K, d):
+    layout = Layout(K, d, with_noise=objective == "likelihood")
+    X, Xd, w = _data(K * 10 + d, d=d)
+    w_used = w if objective == "direction" else np.ones(len(X))
+    k = _kernels(layout, objective, X, Xd, w)
+    rng = np.random.default_rng(7)
+    for _ in range(5):
+        theta = 0.5 * rng.standard_normal(layout.size)
+        ref = objective_numpy(theta, layout, X, Xd, w_used, objective, MARGIN)
+        assert k.value(theta) == pytest.approx(ref, rel=1e-10, abs=1e-12)
+        assert float(k.casadi_function()(theta)) == pytest.approx(ref, rel=1e-10, abs=1e-12)
+
+
+@pytest.mark.parametrize("objective", OBJECTIVES)
+def test_exact_gradient_and_hessian_against_finite_differences(objective):
+    layout = Layout(2, 2, with_noise=objective == "likelihood")
+    X, Xd, w = _data(1)
+    w_used = w if objective == "direction" else np.ones(len(X))
+    k = _kernels(layout, objective, X, Xd, w)
+    theta = 0.3 * np.random.default_rng(2).standard_normal(layout.size)
+    h = 1e-6
+    eye = np.eye(layout.size)
+    fd_grad = np.array([(objective_numpy(theta + h * e, layout, X, Xd, w_used, objective, MARGIN)
+                         - objective_numpy(theta - h * e, layout, X, Xd, w_used, objective,
+                                           MARGIN)) / (2 * h) for e in eye])
+    np.testing.assert_allclose(k.gradient(theta), fd_grad, rtol=1e-5, atol=1e-7)
+    fd_hess = np.array([(k.gradient(theta + h * e) - k.gradient(theta - h * e)) / (2 * h)
+                        for e in eye])
+    H = k.hessian(theta)
+    np.testing.assert_allclose(H, H.T, atol=1e-12)
+    np.testing.assert_allclose(H, fd_hess, rtol=1e-4, atol=1e-6)
+
+
+def test_compiled_kernels_agree_with_the_virtual_machine():
+    layout = Layout(2, 2, with_noise=False)
+    X, Xd, w = _data(4)
+    vm = _kernels(layout, "direction", X, Xd, w, compile=False)
+    cc = _kernels(layout, "direction", X, Xd, w, compile=True)
+    theta = 0.2 * np.random.default_rng(0).standard_normal(layout.size)
+    assert cc.value(theta) == pytest.approx(vm.value(theta), rel=1e-12)
+    np.testing.assert_allclose(cc.gradient(theta), vm.gradient(theta), rtol=1e-10, atol=1e-14)
+    np.testing.assert_allclose(cc.hessian(theta), vm.hessian(theta), rtol=1e-9, atol=1e-12)
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(1, 4), st.integers(1, 5), st.integers(0, 2**31 - 1))
+def test_every_parameter_vector_is_a_stable_model(K, d, seed):
+    """Eq. 10 holds by construction: for any theta, (b)-(e) are satisfied (numpy side)."""
+    layout = Layout(K, d, with_noise=True)
+    theta = 2.0 * np.random.default_rng(seed).standard_normal(layout.size)
+    p = unpack_numpy(theta, layout, MARGIN)
+    assert np.all(p["priors"] > 0) and np.sum(p["priors"]) == pytest.approx(1.0)
+    for k in range(K):
+        assert np.linalg.eigvalsh(p["A"][k] + p["A"][k].T).max() <= -2 * MARGIN * (1 - 1e-9)
+        assert np.linalg.eigvalsh(p["Sx"][k]).min() > 0
+        assert np.linalg.eigvalsh(p["Q"][k]).min() > 0
+
+
+def test_symbolic_and_numeric_unpacking_agree():
+    layout = Layout(3, 3, with_noise=False)
+    theta = np.random.default_rng(5).standard_normal(layout.size)
+    th = ca.SX.sym("th", layout.size)
+    sym = unpack_casadi(th, layout, MARGIN)
+    A_fun = ca.Function("A", [th], sym["A"])
+    Linv_fun = ca.Function("L", [th], sym["Linv"])
+    num = unpack_numpy(theta, layout, MARGIN)
+    for k in range(3):
+        np.testing.assert_allclose(np.asarray(A_fun(theta)[k]), num["A"][k], atol=1e-12)
+        Linv = np.asarray(Linv_fun(theta)[k])
+        np.testing.assert_allclose(np.linalg.inv(Linv.T @ Linv), num["Sx"][k], rtol=1e-10)
+
+
+def test_problem_objective_matches_numpy_at_the_initial_guess(spiral_demos):
+    prob = SEDS(2, objective="mse", random_state=0, compile=False).build_problem(spiral_demos)
+    ref = objective_numpy(prob.theta0, prob.layout, prob.X, prob.Xd, prob.weights, "mse",
+                          prob.margin)
+    assert float(prob.objective_function(prob.theta0)) == pytest.approx(ref, rel=1e-10)

@@ -1,0 +1,246 @@
+"""Real IPOPT solves: constraint satisfaction, stability, accuracy, persistence, bad input."""
+
+import warnings
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from seds_casadi import (
+    SEDS,
+    ConvergenceWarning,
+    Demonstrations,
+    ModelFileError,
+    SolverError,
+    StabilityError,
+    StableDS,
+    certify,
+)
+from seds_casadi.datasets import load_lasa
+from seds_casadi.metrics import direction_error
+from seds_casadi.parametrization import OBJECTIVES
+
+
+def _assert_certified(model: StableDS):
+    d = model.n_dims
+    cert = certify(model.priors, model.means, model.covariances, model.target)
+    assert cert["max_eig_sym_A"] < 0
+    assert cert["min_eig_cov"] > 0
+    for k in range(model.n_components):
+        assert np.linalg.eigvalsh(model.A[k] + model.A[k].T).max() < 0          # (b)
+        assert np.linalg.eigvalsh(model.covariances[k]).min() > 0               # (c)
+        A = model.covariances[k, d:, :d] @ np.linalg.inv(model.covariances[k, :d, :d])
+        np.testing.assert_allclose(A, model.A[k], rtol=1e-7, atol=1e-9 * np.abs(A).max())
+        resid = model.means[k, d:] + A @ (model.target - model.means[k, :d])      # (a)
+        assert np.linalg.norm(resid) < 1e-8 * max(1.0, np.linalg.norm(model.means[k, d:]))
+    assert np.all((model.priors > 0) & (model.priors <= 1))                      # (d)
+    assert np.sum(model.priors) == pytest.approx(1.0, abs=1e-12)                 # (e)
+    np.testing.assert_allclose(model.predict(model.target), 0.0, atol=1e-10)     # f(x*) = 0
+
+
+@pytest.fixture(scope="module")
+def fitted(spiral_demos, curved_demos_3d):
+    """One fit per (data set, objective), shared by the tests of this module."""
+    lasa = load_lasa("Angle", n_samples=25)
+    out = {}
+    for name, demos in (("spiral", spiral_demos), ("curved3d", curved_demos_3d), ("angle", lasa)):
+        for obj in OBJECTIVES:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", ConvergenceWarning)
+                out[name, obj] = SEDS(2, objective=obj, random_state=0).fit(demos)
+    return out
+
+
+@pytest.mark.parametrize("data", ["spiral", "curved3d", "angle"])
+@pytest.mark.parametrize("objective", OBJECTIVES)
+def test_constraints_hold_after_fitting(fitted, data, objective):
+    model = fitted[data, objective]
+    _assert_certified(model)
+    info = model.fit_info
+    for key in ("status", "iterations", "objective", "seconds"):
+        assert key in info
+    assert info["iterations"] > 0
+    # IPOPT does not end worse than the k-means + EM start (up to its own tolerance)
+    assert info["objective"] <= info["objective_initial"] + 1e-6 * max(1.0, abs(info["objective"]))
+
+
+@pytest.mark.parametrize("data", ["spiral", "curved3d", "angle"])
+def test_rollouts_from_far_away_converge_to_the_target(fitted, data):
+    model = fitted[data, "direction"]
+    rng = np.random.default_rng(11)
+    d = model.n_dims
+    scale = 50 * max(1.0, float(np.abs(model.means[:, :d] - model.target).max()))
+    starts = model.target + scale * rng.standard_normal((12, d))
+    # f grows at most linearly, so a step small against 1/||A|| is stable for RK4
+    dt = 0.5 / max(np.linalg.norm(A, 2) for A in model.A)
+    trajs = model.rollout(starts, dt=dt, max_steps=200000, tol=1e-3 * scale)
+    for tr in trajs:
+        assert np.all(np.isfinite(tr))
+        assert np.linalg.norm(tr[-1] - model.target) < 1e-3 * scale
+
+
+def test_known_linear_system_is_recovered(spiral_demos):
+    """Data from xdot = A x with A stable: a one-Gaussian MSE fit recovers A."""
+    model = SEDS(1, objective="mse", random_state=0).fit(spiral_demos)
+    np.testing.assert_allclose(model.A[0], [[-1.0, -2.0], [2.0, -1.0]], atol=1e-3)
+    assert model.fit_info["objective"] < 1e-6
+
+
+def test_direction_objective_fits_directions_better_than_mse():
+    demos = load_lasa("Angle", n_samples=40)
+    X, V = np.concatenate(demos.positions), np.concatenate(demos.velocities)
+    errs = {}
+    for obj in ("direction", "mse"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ConvergenceWarning)
+            m = SEDS(3, objective=obj, random_state=0).fit(demos)
+        errs[obj] = direction_error(m.predict(X), V)
+    assert errs["direction"] < errs["mse"]
+    assert errs["direction"] < 0.05
+
+
+def test_fit_is_deterministic_for_a_seed(spiral_demos):
+    a = SEDS(2, random_state=3).fit(spiral_demos)
+    b = SEDS(2, random_state=3).fit(spiral_demos)
+    np.testing.assert_array_equal(a.means, b.means)
+    np.testing.assert_array_equal(a.covariances, b.covariances)
+
+
+def test_seven_dimensional_joint_space():
+    rng = np.random.default_rng(0)
+    A = -np.eye(7) + 0.3 * (lambda M: M - M.T)(rng.standard_normal((7, 7)))
+    from conftest import linear_demos
+
+    demos = linear_demos(A, rng.standard_normal((2, 7)), dt=0.1, steps=30)
+    model = SEDS(1, objective="direction", random_state=0, compile=False).fit(demos)
+    _assert_certified(model)
+    X, V, _, _ = demos.stacked()
+    assert direction_error(model.predict(X + demos.target), V) < 1e-3
+
+
+def test_predict_is_vectorised_finite_everywhere_and_matches_casadi(fitted):
+    model = fitted["spiral", "likelihood"]
+    X = np.random.default_rng(0).standard_normal((30, 2)) * np.logspace(-3, 4, 30)[:, None]
+    F = model.predict(X)
+    assert F.shape == (30, 2) and np.all(np.isfinite(F))
+    np.testing.assert_allclose(model.predict(X[3]), F[3])
+    f = model.to_casadi()
+    assert isinstance(f, ca.Function)
+    for x, fx in zip(X, F):
+        np.testing.assert_allclose(np.asarray(f(x)).ravel(), fx, rtol=1e-9, atol=1e-9)
+
+
+def test_save_load_round_trip_is_exact(tmp_path, fitted):
+    model = fitted["curved3d", "direction"]
+    path = tmp_path / "model.npz"
+    model.save(path)
+    back = StableDS.load(path)
+    for attr in ("priors", "means", "covariances", "target", "A"):
+        np.testing.assert_array_equal(getattr(back, attr), getattr(model, attr))
+    assert back.fit_info["status"] == model.fit_info["status"]
+    with np.load(path, allow_pickle=False) as f:  # no pickled objects inside
+        assert "checksum" in f.files
+
+
+def test_tampered_corrupt_and_unstable_files_are_refused(tmp_path, fitted):
+    model = fitted["spiral", "mse"]
+    path = tmp_path / "m.npz"
+    model.save(path)
+    with np.load(path, allow_pickle=False) as f:
+        data = {k: f[k] for k in f.files}
+    # tampered: a mean moved without updating the checksum
+    bad = dict(data)
+    bad["means"] = data["means"] + 0.1
+    np.savez(tmp_path / "tampered.npz", **bad)
+    with pytest.raises(ModelFileError, match="checksum"):
+        StableDS.load(tmp_path / "tampered.npz")
+    # truncated file
+    raw = path.read_bytes()
+    (tmp_path / "trunc.npz").write_bytes(raw[: len(raw) // 2])
+    with pytest.raises(ModelFileError):
+        StableDS.load(tmp_path / "trunc.npz")
+    # missing entry
+    partial = {k: v for k, v in data.items() if k != "covariances"}
+    np.savez(tmp_path / "partial.npz", **partial)
+    with pytest.raises(ModelFileError, match="missing"):
+        StableDS.load(tmp_path / "partial.npz")
+    # unstable but with a valid checksum: re-certification refuses it
+    unstable = StableDS.__new__(StableDS)
+    unstable.priors, unstable.target = data["priors"], data["target"]
+    unstable.means = data["means"].copy()
+    unstable.covariances = data["covariances"].copy()
+    d = 2
+    unstable.covariances[0, d:, :d] *= -1  # flips A_0 to an unstable matrix
+    unstable.covariances[0, :d, d:] *= -1
+    unstable.means[0, d:] *= -1
+    info = str(data["fit_info"])
+    bad = dict(data, covariances=unstable.covariances, means=unstable.means,
+               checksum=np.array(unstable._checksum(info)))
+    np.savez(tmp_path / "unstable.npz", **bad)
+    with pytest.raises(StabilityError, match=r"\(b\)"):
+        StableDS.load(tmp_path / "unstable.npz")
+
+
+def test_certificate_names_each_violated_constraint():
+    d = 2
+    Sx = np.eye(d)
+    A = -np.eye(d)
+    cov = np.block([[Sx, (A @ Sx).T], [A @ Sx, A @ Sx @ A.T + 0.1 * np.eye(d)]])
+    target = np.zeros(d)
+    good_means = np.array([[1.0, 0.0, -1.0, 0.0]])
+    StableDS([1.0], good_means, [cov], target)  # passes
+    with pytest.raises(StabilityError, match=r"\(e\)"):
+        StableDS([0.5], good_means, [cov], target)
+    with pytest.raises(StabilityError, match=r"\(d\)"):
+        StableDS([-0.5, 1.5], np.repeat(good_means, 2, 0), [cov, cov], target)
+    with pytest.raises(StabilityError, match=r"\(a\)"):
+        StableDS([1.0], np.array([[1.0, 0.0, 5.0, 0.0]]), [cov], target)
+    notpd = cov.copy()
+    notpd[d:, d:] = 0.0
+    with pytest.raises(StabilityError, match=r"\(c\)"):
+        StableDS([1.0], good_means, [notpd], target)
+    with pytest.raises(ValueError, match="inconsistent shapes"):
+        StableDS([1.0], good_means[:, :3], [cov], target)
+
+
+def test_iteration_limit_warns_or_raises(spiral_demos):
+    with pytest.warns(ConvergenceWarning, match="without converging"):
+        m = SEDS(2, objective="mse", random_state=0, max_iter=2).fit(spiral_demos)
+    _assert_certified(m)
+    assert m.fit_info["success"] is False
+    with pytest.raises(SolverError, match="Maximum_Iterations_Exceeded"):
+        SEDS(2, objective="mse", random_state=0, max_iter=2,
+             require_convergence=True).fit(spiral_demos)
+
+
+@pytest.mark.parametrize(
+    "kwargs, exc, match",
+    [
+        (dict(n_components=0), ValueError, "at least 1"),
+        (dict(n_components=2.5), TypeError, "integer"),
+        (dict(n_components=2, objective="speed"), ValueError, "unknown objective"),
+        (dict(n_components=2, hessian="bfgs"), ValueError, "unknown hessian"),
+        (dict(n_components=2, omega_lower=0.0), ValueError, "omega_lower"),
+    ],
+)
+def test_bad_settings(kwargs, exc, match):
+    with pytest.raises(exc, match=match):
+        SEDS(**kwargs)
+
+
+def test_bad_data_for_fit(spiral_demos):
+    with pytest.raises(TypeError, match="Demonstrations"):
+        SEDS(2).fit(np.zeros((10, 2)))
+    tiny = Demonstrations([np.stack([np.linspace(1, 0, 5), np.zeros(5)], 1)], dt=0.1)
+    with pytest.raises(ValueError, match="too few"):
+        SEDS(8).fit(tiny)
+
+
+def test_rollout_and_predict_bad_input(fitted):
+    model = fitted["spiral", "mse"]
+    with pytest.raises(ValueError, match="NaN"):
+        model.predict([np.nan, 0.0])
+    with pytest.raises(ValueError, match="shape"):
+        model.predict(np.zeros((3, 5)))
+    with pytest.raises(ValueError, match="dt must be positive"):
+        model.rollout([1.0, 1.0], dt=0.0)
