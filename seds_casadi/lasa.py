@@ -15,6 +15,7 @@ time and IPOPT's iterations. Units are LASA's: mm and mm/s.
 from __future__ import annotations
 
 import csv
+import multiprocessing
 import os
 import tempfile
 import time
@@ -184,7 +185,9 @@ def run_lasa(shapes=None, objectives=("direction",), protocols=PROTOCOLS, n_comp
                 bar.update(1)
         else:
             own = executor is None
-            ex = executor or ProcessPoolExecutor(max_workers=int(workers))
+            # spawn, not fork: a forked child of a process that has loaded CasADi can deadlock
+            ex = executor or ProcessPoolExecutor(max_workers=int(workers),
+                                                 mp_context=multiprocessing.get_context("spawn"))
             try:
                 for r in ex.map(_task, tasks):
                     results.append(r)

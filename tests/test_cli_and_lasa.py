@@ -1,0 +1,93 @@
+"""The command line (through the installed console script) and the LASA benchmark runner."""
+
+import csv
+import os
+import shutil
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from seds_casadi import StableDS, save_demonstrations
+from seds_casadi.datasets import LASA_SHAPES, LASA_SINGLE_SHAPES, load_lasa
+from seds_casadi.lasa import CSV_COLUMNS, evaluate_shape, run_lasa
+
+
+def _cli():
+    exe = shutil.which("seds-casadi")
+    if exe is None:  # not installed as a console script: fall back to the module
+        return [sys.executable, "-m", "seds_casadi"]
+    return [exe]
+
+
+def test_all_lasa_shapes_load_offline():
+    assert len(LASA_SHAPES) == 30 and len(LASA_SINGLE_SHAPES) == 26
+    for name in LASA_SHAPES:
+        d = load_lasa(name)
+        assert d.n_demos == 7 and d.n_dims == 2
+        assert all(950 <= len(p) <= 1000 for p in d.positions)
+    with pytest.raises(ValueError, match="unknown LASA shape"):
+        load_lasa("Circle")
+
+
+def test_evaluate_shape_split_protocol_scores_held_out_demos(tmp_path):
+    r = evaluate_shape("GShape", objective="direction", protocol="split", n_components=2,
+                       n_samples=30, figure_path=str(tmp_path / "g.png"))
+    assert r.e_dot < 0.2 and r.rmse > 0 and r.dtwd > 0 and r.iterations > 0
+    assert (tmp_path / "g.png").stat().st_size > 1000
+
+
+def test_cli_fit_writes_a_loadable_model_and_figure(tmp_path, spiral_demos):
+    demo_file = tmp_path / "demos.npz"
+    save_demonstrations(demo_file, spiral_demos)
+    out = tmp_path / "out"
+    res = subprocess.run(_cli() + ["fit", str(demo_file), "-K", "2", "--objective", "mse",
+                                   "--out", str(out)], capture_output=True, text=True,
+                         timeout=600)
+    assert res.returncode == 0, res.stderr
+    model = StableDS.load(out / "model.npz")
+    assert model.n_components == 2
+    assert (out / "streamlines.png").stat().st_size > 1000
+    assert '"status"' in res.stdout
+
+
+def test_cli_lasa_writes_the_csv_with_the_documented_columns(tmp_path):
+    out = tmp_path / "lasa"
+    res = subprocess.run(_cli() + ["lasa", "--shapes", "Angle", "--objectives", "direction",
+                                   "mse", "--protocols", "all", "-K", "2", "--samples", "25",
+                                   "--out", str(out)],
+                         capture_output=True, text=True, timeout=600)
+    assert res.returncode == 0, res.stderr
+    with open(out / "lasa.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    assert tuple(rows[0].keys()) == CSV_COLUMNS
+    assert {r["objective"] for r in rows} == {"direction", "mse"}
+    assert all(float(r["e_dot"]) < 0.3 for r in rows)
+    assert (out / "summary.txt").exists()
+    assert os.path.exists(out / "figures" / "Angle_direction.png")
+
+
+def test_cli_reports_bad_input_clearly(tmp_path):
+    res = subprocess.run(_cli() + ["fit", str(tmp_path / "nope.csv")], capture_output=True,
+                         text=True, timeout=120)
+    assert res.returncode == 2
+    assert "no demonstrations file" in res.stderr
+    res = subprocess.run(_cli() + ["lasa", "--shapes", "Circle", "--out", str(tmp_path)],
+                         capture_output=True, text=True, timeout=120)
+    assert res.returncode == 2 and "unknown LASA shape" in res.stderr
+    bad = tmp_path / "nan.csv"
+    bad.write_text("demo,t,x0,x1\n0,0,1,nan\n0,1,0,0\n")
+    res = subprocess.run(_cli() + ["fit", str(bad)], capture_output=True, text=True, timeout=120)
+    assert res.returncode == 2 and "NaN" in res.stderr
+
+
+def test_run_lasa_in_process_pool_matches_serial():
+    kw = dict(shapes=["Angle"], objectives=["direction"], protocols=["all"], n_components=2,
+              n_samples=20, progress=False, figures=False)
+    a = run_lasa(workers=1, **kw)
+    b = run_lasa(workers=2, **kw)
+    assert a[0].e_dot == pytest.approx(b[0].e_dot, rel=1e-12)
+    assert np.isfinite(a[0].dtwd)
+    with pytest.raises(ValueError, match="workers"):
+        run_lasa(workers=0, **kw)
