@@ -1,0 +1,473 @@
+"""The hitting motion (paper Section 4): target field, strength factor and the steerable DS.
+
+    xdot = f_h(x) = v(x) h(x)                                   (Eq. 3)
+    h(x) = f(x) / ||f(x)||,   h(x*) = lim_{x -> x*} h(x)         (Eq. 8)
+    v(x) = GMR of the speed on the position                      (Eq. 12)
+    v* = v(x*),  psi* = h(x*)                                    (Eq. 13)
+    xdot = kappa R_alpha v(R_alpha^T x) h(R_alpha^T x)           (Eq. 14)
+
+Positions are relative to the ball (x* = 0), z up; R_alpha turns about +z through the ball.
+
+Choices where the paper leaves them open (documented for users):
+
+* **The limit at the target.** Near x* the SEDS model is linear, f(x) ~ J (x - x*) with
+  J = sum_k h^k(x*) A_k, and every trajectory that is not exceptional arrives tangent to the
+  eigenvector of J with the slowest (real) eigenvalue. psi* is that eigenvector, oriented along the
+  demonstrations' arrival. A model whose slowest eigenvalues are a complex pair spirals into x*,
+  has no limit direction, and is refused (ValueError).
+* **Positivity of v (footnote 4).** The GMR is done on log-speed, v(x) = exp(E[log v | x]), which
+  is positive everywhere by construction and equals Eq. 12 applied to log v.
+* **Resting mode.** After the hit, xdot = A_r (x - x_r) with A_r = -g I + w (z psi^T - psi z^T)
+  (symmetric part -g I: stable) and the rest point x_r chosen so the velocity is continuous at the
+  hit. w = 0 slows down along the hitting direction (flat fields); w = g curves the club upwards
+  (fields where it could touch the ground).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import casadi as ca
+import numpy as np
+
+from .demonstrations import Demonstrations
+from .gmm import gmr_predict
+from .seds import SEDS
+from .stable_ds import StableDS
+
+__all__ = ["TargetField", "StrengthFactor", "HittingMotion", "RolloutResult", "rotation_z"]
+
+_TINY = 1e-200
+
+
+def rotation_z(alpha: float) -> np.ndarray:
+    """R_alpha: rotation by alpha [rad] about +z."""
+    c, s = np.cos(alpha), np.sin(alpha)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def _check_alpha_kappa(alpha, kappa) -> tuple[float, float]:
+    try:
+        alpha, kappa = float(alpha), float(kappa)
+    except (TypeError, ValueError):
+        raise TypeError(f"alpha and kappa must be numbers, got {alpha!r}, {kappa!r}") from None
+    if not np.isfinite(alpha):
+        raise ValueError(f"the hitting angle alpha must be finite (radians), got {alpha}")
+    if not (np.isfinite(kappa) and kappa > 0):
+        raise ValueError(f"the speed gain kappa must be positive and finite, got {kappa}")
+    return alpha, kappa
+
+
+def _points(X, d: int, name: str = "X") -> tuple[np.ndarray, bool]:
+    X = np.asarray(X, dtype=float)
+    single = X.ndim == 1
+    X2 = np.atleast_2d(X)
+    if X2.ndim != 2 or X2.shape[1] != d:
+        raise ValueError(f"{name} must have shape (n, {d}) or ({d},), got {X.shape}")
+    if not np.all(np.isfinite(X2)):
+        raise ValueError(f"{name} contains NaN or infinite values")
+    return X2, single
+
+
+class TargetField:
+    """h(x) = f(x)/||f(x)|| (Eq. 8) of a certified StableDS, defined everywhere.
+
+    Parameters
+    ----------
+    ds : StableDS
+        Fitted with the direction objective (any objective works; Eq. 9 is the paper's).
+    approach : array, shape (d,), optional
+        A direction the demonstrations arrive along (orients psi*). Default: +x.
+
+    Attributes
+    ----------
+    hitting_direction : array, shape (d,)
+        psi* (Eq. 13), unit norm.
+    jacobian : array, shape (d, d)
+        J = df/dx at x*.
+    """
+
+    def __init__(self, ds: StableDS, approach=None) -> None:
+        if not isinstance(ds, StableDS):
+            raise TypeError(f"TargetField needs a StableDS, got {type(ds).__name__}")
+        self.ds = ds
+        d = ds.n_dims
+        from .gmm import responsibilities
+
+        h = responsibilities(ds.target[None], ds.priors, ds.means[:, :d],
+                             ds.covariances[:, :d, :d])[0]
+        J = np.einsum("k,kij->ij", h, ds.A)
+        ev, V = np.linalg.eig(J)
+        i = int(np.argmax(ev.real))
+        if abs(ev[i].imag) > 1e-9 * max(1.0, abs(ev[i].real)):
+            raise ValueError(
+                "the model spirals into its target (the slowest eigenvalues of df/dx at x* are a "
+                f"complex pair, {ev[i]:.3g}), so the target field has no limit at x*; refit with "
+                "more weight on the last samples (omega_upper) or another n_components")
+        psi = np.real(V[:, i])
+        psi /= np.linalg.norm(psi)
+        a = np.eye(d)[0] if approach is None else np.asarray(approach, dtype=float)
+        if np.dot(psi, a) < 0:
+            psi = -psi
+        self.jacobian = J
+        self.hitting_direction = psi
+        self.eigenvalues = ev
+
+    def __call__(self, X) -> np.ndarray:
+        """h at points X, shape (n, d) or (d,), relative to the ds's coordinates."""
+        X2, single = _points(X, self.ds.n_dims)
+        F = self.ds.predict(X2)
+        nrm = np.linalg.norm(F, axis=1)
+        out = np.where(nrm[:, None] > _TINY, F / np.maximum(nrm, _TINY)[:, None],
+                       self.hitting_direction[None, :])
+        return out[0] if single else out
+
+
+class StrengthFactor:
+    """v(x) > 0 by GMR on (position, log speed) (Eq. 12, in the log domain; footnote 4).
+
+    Parameters
+    ----------
+    priors, means, covariances : the joint GMM over (x, log v), shapes (K,), (K, d+1),
+        (K, d+1, d+1).
+    """
+
+    def __init__(self, priors, means, covariances) -> None:
+        self.priors = np.asarray(priors, dtype=float)
+        self.means = np.asarray(means, dtype=float)
+        self.covariances = np.asarray(covariances, dtype=float)
+        self.n_dims = self.means.shape[1] - 1
+
+    @classmethod
+    def fit(cls, positions: np.ndarray, speeds: np.ndarray, n_components: int = 2,
+            random_state=0) -> StrengthFactor:
+        """Fit the joint GMM by k-means + EM.
+
+        Parameters
+        ----------
+        positions : array, shape (n, d)
+        speeds : array, shape (n,), all > 0
+        """
+        from sklearn.mixture import GaussianMixture
+
+        speeds = np.asarray(speeds, dtype=float)
+        if np.any(~np.isfinite(speeds)) or np.any(speeds <= 0):
+            raise ValueError("speeds for the strength factor must be positive and finite")
+        data = np.column_stack([positions, np.log(speeds)])
+        gm = GaussianMixture(n_components=int(n_components), covariance_type="full",
+                             reg_covar=1e-6, random_state=random_state).fit(data)
+        return cls(gm.weights_, gm.means_, gm.covariances_)
+
+    def __call__(self, X) -> np.ndarray:
+        """v at points X, shape (n, d) -> (n,), or (d,) -> float."""
+        X2, single = _points(X, self.n_dims)
+        d = self.n_dims
+        logv = gmr_predict(X2, self.priors, self.means, self.covariances, np.arange(d), [d])
+        v = np.exp(logv[:, 0])
+        return float(v[0]) if single else v
+
+
+@dataclass
+class RolloutResult:
+    """A swing integrated by :meth:`HittingMotion.rollout`.
+
+    Attributes
+    ----------
+    times : array, shape (T,)
+    positions : array, shape (T, 3)
+        Club-head positions in the field frame.
+    velocities : array, shape (T, 3)
+        Commanded velocities.
+    balls : array, shape (T, 3)
+        Ball position at each step.
+    hit : bool
+        Whether the club reached the ball (crossed the plane through it, perpendicular to the
+        commanded direction, within ``hit_radius``).
+    hit_time, hit_position, hit_velocity :
+        At the moment of the hit (interpolated to the crossing of the plane through the ball
+        perpendicular to the commanded hitting direction); None without a hit.
+    commanded_direction : array, shape (3,)
+        R_alpha psi* for the alpha in force at the hit.
+    commanded_speed : float
+        kappa v* at the hit.
+    """
+
+    times: np.ndarray
+    positions: np.ndarray
+    velocities: np.ndarray
+    balls: np.ndarray
+    hit: bool
+    hit_time: float | None = None
+    hit_position: np.ndarray | None = None
+    hit_velocity: np.ndarray | None = None
+    commanded_direction: np.ndarray | None = None
+    commanded_speed: float | None = None
+    events: list = field(default_factory=list)
+
+    @property
+    def direction_error_deg(self) -> float:
+        """Angle [deg] between the hitting velocity and the commanded direction."""
+        if not self.hit:
+            return float("nan")
+        u = self.hit_velocity / np.linalg.norm(self.hit_velocity)
+        return float(np.degrees(np.arccos(np.clip(u @ self.commanded_direction, -1, 1))))
+
+    @property
+    def speed_error(self) -> float:
+        """Relative error of the hitting speed against kappa v*."""
+        if not self.hit:
+            return float("nan")
+        return float(np.linalg.norm(self.hit_velocity) / self.commanded_speed - 1.0)
+
+
+class HittingMotion:
+    """The steerable hitting DS of Eq. 14, from a target field and a strength factor.
+
+    Parameters
+    ----------
+    target_field : TargetField
+    strength : StrengthFactor
+    rest_length : float
+        Distance [m] over which the resting mode stops the club after the hit.
+    """
+
+    def __init__(self, target_field: TargetField, strength: StrengthFactor,
+                 rest_length: float = 0.2) -> None:
+        if target_field.ds.n_dims != 3 or strength.n_dims != 3:
+            raise ValueError("the hitting motion is defined in 3-D (club-head position)")
+        if np.linalg.norm(target_field.ds.target) > 1e-12:
+            raise ValueError("the hitting motion needs its StableDS fitted with the ball at the "
+                             "origin (target=[0, 0, 0])")
+        if not (np.isfinite(rest_length) and rest_length > 0):
+            raise ValueError(f"rest_length must be positive, got {rest_length}")
+        self.target_field = target_field
+        self.strength = strength
+        self.rest_length = float(rest_length)
+        self.hitting_direction = target_field.hitting_direction.copy()
+        self.hitting_speed = float(strength(np.zeros(3)))
+
+    @classmethod
+    def fit(cls, demos: Demonstrations, n_components: int = 3, strength_components: int = 2,
+            random_state=0, **seds_kwargs) -> HittingMotion:
+        """Learn the target field (SEDS, direction objective) and the strength factor (GMR).
+
+        Parameters
+        ----------
+        demos : Demonstrations
+            3-D club-head demonstrations ending at the ball, which must be the origin
+            (``target=[0, 0, 0]``), with a non-zero speed there.
+        n_components : int
+            Gaussians of the SEDS model (the paper used 3).
+        strength_components : int
+            Gaussians of the strength factor (the paper used 2).
+        **seds_kwargs
+            Passed to :class:`SEDS` (e.g. ``omega_upper``).
+        """
+        if not isinstance(demos, Demonstrations):
+            raise TypeError(f"fit expects Demonstrations, got {type(demos).__name__}")
+        if demos.n_dims != 3:
+            raise ValueError(f"hitting demonstrations must be 3-D, got {demos.n_dims}-D")
+        if np.linalg.norm(demos.target) > 1e-12:
+            raise ValueError("give the demonstrations relative to the ball with target=[0, 0, 0]")
+        end_speed = np.mean([np.linalg.norm(v[-1]) for v in demos.velocities])
+        top = max(np.linalg.norm(v, axis=1).max() for v in demos.velocities)
+        if end_speed <= 0.05 * top:
+            raise ValueError(
+                "the demonstrations' speed at the target is (nearly) zero: they stop at the ball "
+                "instead of hitting it, so there is no hitting motion to learn")
+        seds_kwargs.setdefault("objective", "direction")
+        ds = SEDS(n_components, random_state=random_state, **seds_kwargs).fit(demos)
+        approach = np.mean([v[-1] / np.linalg.norm(v[-1]) for v in demos.velocities], axis=0)
+        field_ = TargetField(ds, approach=approach)
+        X = np.concatenate(demos.positions)
+        S = np.concatenate([np.linalg.norm(v, axis=1) for v in demos.velocities])
+        keep = S > 1e-3 * S.max()
+        strength = StrengthFactor.fit(X[keep], S[keep], strength_components, random_state)
+        return cls(field_, strength)
+
+    # ------------------------------------------------------------ evaluation
+    def velocity(self, X, alpha: float = 0.0, kappa: float = 1.0) -> np.ndarray:
+        """Eq. 14: kappa R_alpha v(R_alpha^T x) h(R_alpha^T x), x relative to the ball.
+
+        Parameters
+        ----------
+        X : array, shape (n, 3) or (3,)
+        alpha : float
+            Hitting angle [rad] about +z.
+        kappa : float
+            Speed gain (> 0).
+        """
+        alpha, kappa = _check_alpha_kappa(alpha, kappa)
+        X2, single = _points(X, 3)
+        R = rotation_z(alpha)
+        Y = X2 @ R  # rows: R^T x
+        out = kappa * (self.strength(Y)[:, None] * self.target_field(Y)) @ R.T
+        return out[0] if single else out
+
+    def hitting_velocity(self, alpha: float = 0.0, kappa: float = 1.0) -> np.ndarray:
+        """The commanded velocity at the ball, kappa v* R_alpha psi*."""
+        alpha, kappa = _check_alpha_kappa(alpha, kappa)
+        return kappa * self.hitting_speed * rotation_z(alpha) @ self.hitting_direction
+
+    def resting_velocity(self, X, hit_position, hit_velocity, mode: str = "flat") -> np.ndarray:
+        """The resting-mode DS after the hit (see module docstring).
+
+        Parameters
+        ----------
+        X : array, shape (n, 3) or (3,)
+        hit_position, hit_velocity : array, shape (3,)
+        mode : {"flat", "arc"}
+        """
+        X2, single = _points(X, 3)
+        A, rest = self._rest_system(np.asarray(hit_position, float),
+                                    np.asarray(hit_velocity, float), mode)
+        out = (X2 - rest) @ A.T
+        return out[0] if single else out
+
+    def _rest_system(self, p_hit, v_hit, mode):
+        if mode not in ("flat", "arc"):
+            raise ValueError(f"unknown resting mode {mode!r}; valid: flat, arc")
+        speed = float(np.linalg.norm(v_hit))
+        if speed <= 0:
+            return -np.eye(3), p_hit.copy()
+        psi = v_hit / speed
+        g = speed / self.rest_length
+        z = np.array([0.0, 0.0, 1.0])
+        w = g if mode == "arc" else 0.0
+        A = -g * np.eye(3) + w * (np.outer(z, psi) - np.outer(psi, z))
+        rest = p_hit + np.linalg.solve(A, -v_hit)  # A (p_hit - rest) = v_hit
+        return A, rest
+
+    # ------------------------------------------------------------ integration
+    def rollout(self, start, alpha: float = 0.0, kappa: float = 1.0, dt: float = 0.002,
+                ball=None, perturb: Sequence[dict] | None = None, max_time: float = 5.0,
+                rest_mode: str = "flat", rest_time: float = 0.5,
+                params: Callable | None = None, hit_radius: float = 0.02) -> RolloutResult:
+        """Integrate a swing from ``start`` until the club hits the ball, then rest.
+
+        Parameters
+        ----------
+        start : array, shape (3,)
+            Club-head start in the field frame.
+        alpha, kappa : float
+            Hitting angle [rad] and speed gain.
+        dt : float
+            Step [s] (500 Hz by default, the controller's rate).
+        ball : array, shape (3,), optional
+            Ball position in the field frame (default: the origin).
+        perturb : list of dict, optional
+            Changes applied on the fly at given times, no re-planning: each dict has ``t`` [s]
+            and any of ``ball`` (new position), ``alpha``, ``kappa``.
+        max_time : float
+            Give up (no hit) after this time.
+        rest_mode : {"flat", "arc"}
+        rest_time : float
+            How long to integrate the resting mode after the hit.
+        params : callable, optional
+            ``params(t, ball) -> (alpha, kappa)`` evaluated every step (e.g. a hitting-parameter
+            model reacting to a moving hole); overrides alpha and kappa.
+        hit_radius : float
+            The club hits the ball when it crosses the plane through the ball perpendicular to
+            the commanded hitting direction within this distance [m] of the ball's centre.
+        """
+        x, _ = _points(start, 3, "start")
+        x = x[0].copy()
+        alpha, kappa = _check_alpha_kappa(alpha, kappa)
+        if not (np.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt must be positive, got {dt}")
+        b = np.zeros(3) if ball is None else _points(ball, 3, "ball")[0][0].copy()
+        events = sorted(perturb or [], key=lambda e: float(e["t"]))
+        for e in events:
+            if "t" not in e or not np.isfinite(float(e["t"])):
+                raise ValueError(f"each perturbation needs a finite time 't': {e!r}")
+        if rest_mode not in ("flat", "arc"):
+            raise ValueError(f"unknown resting mode {rest_mode!r}; valid: flat, arc")
+        if not (np.isfinite(hit_radius) and hit_radius > 0):
+            raise ValueError(f"hit_radius must be positive, got {hit_radius}")
+        t = 0.0
+        T, P, V, B = [], [], [], []
+        applied = []
+        ei = 0
+        hit = None
+        n_max = int(np.ceil(max_time / dt))
+        for _ in range(n_max):
+            while ei < len(events) and float(events[ei]["t"]) <= t + 1e-12:
+                e = events[ei]
+                if "ball" in e:
+                    b = _points(e["ball"], 3, "perturbation ball")[0][0].copy()
+                if "alpha" in e or "kappa" in e:
+                    alpha, kappa = _check_alpha_kappa(e.get("alpha", alpha), e.get("kappa", kappa))
+                applied.append(dict(e))
+                ei += 1
+            if params is not None:
+                alpha, kappa = _check_alpha_kappa(*params(t, b.copy()))
+            v = self.velocity(x - b, alpha, kappa)
+            T.append(t)
+            P.append(x.copy())
+            V.append(v)
+            B.append(b.copy())
+            psi = rotation_z(alpha) @ self.hitting_direction
+            x_new = x + dt * v
+            s0 = float(psi @ (x - b))
+            s1 = float(psi @ (x_new - b))
+            if s0 < 0 <= s1 and np.linalg.norm(
+                    (x + (-s0 / (s1 - s0)) * (x_new - x)) - b) <= hit_radius:
+                lam = -s0 / (s1 - s0)
+                p_hit = x + lam * (x_new - x)
+                # the club crosses the ball with the velocity of this step (at the ball itself h
+                # is only defined as its limit, Eq. 8, which this velocity approaches)
+                hit = (t + lam * dt, p_hit, v.copy(), psi, kappa * self.hitting_speed)
+                x, t = p_hit, t + lam * dt
+                break
+            x, t = x_new, t + dt
+        if hit is None:
+            return RolloutResult(np.array(T), np.array(P), np.array(V), np.array(B), False,
+                                 events=applied)
+        t_hit, p_hit, v_hit, psi, spd = hit
+        A, rest = self._rest_system(p_hit, v_hit, rest_mode)
+        for _ in range(int(np.ceil(rest_time / dt)) + 1):
+            v = (x - rest) @ A.T
+            T.append(t)
+            P.append(x.copy())
+            V.append(v)
+            B.append(b.copy())
+            x, t = x + dt * v, t + dt
+        return RolloutResult(np.array(T), np.array(P), np.array(V), np.array(B), True, t_hit,
+                             p_hit, v_hit, psi, spd, events=applied)
+
+    # ------------------------------------------------------------ CasADi
+    def to_casadi(self, name: str = "hitting_ds") -> ca.Function:
+        """Eq. 14 as a CasADi Function (x (3,), alpha, kappa) -> xdot (3,), for code generation.
+
+        Near the ball (||f|| below 1e-200) the target field takes its limit psi*, as in numpy.
+        """
+        x = ca.SX.sym("x", 3)
+        alpha = ca.SX.sym("alpha")
+        kappa = ca.SX.sym("kappa")
+        c, s = ca.cos(alpha), ca.sin(alpha)
+        R = ca.vertcat(ca.horzcat(c, -s, 0), ca.horzcat(s, c, 0), ca.horzcat(0, 0, 1))
+        y = R.T @ x
+        f = self.target_field.ds.to_casadi()(y)
+        nf = ca.norm_2(f)
+        psi = ca.DM(self.hitting_direction)
+        h = ca.if_else(nf > _TINY, f / ca.fmax(nf, _TINY), psi)
+        sf = self.strength
+        d = 3
+        logp, lin = [], []
+        for k in range(len(sf.priors)):
+            Sxx = sf.covariances[k, :d, :d]
+            L = np.linalg.cholesky(Sxx)
+            z = ca.DM(np.linalg.inv(L)) @ (y - ca.DM(sf.means[k, :d]))
+            logp.append(float(np.log(sf.priors[k]) - np.sum(np.log(np.diag(L))))
+                        - 0.5 * ca.sumsqr(z))
+            gain = np.linalg.solve(Sxx, sf.covariances[k, :d, d])
+            lin.append(sf.means[k, d] + ca.dot(ca.DM(gain), y - ca.DM(sf.means[k, :d])))
+        m = logp[0]
+        for a in logp[1:]:
+            m = ca.fmax(m, a)
+        e = [ca.exp(a - m) for a in logp]
+        tot = sum(e[1:], e[0])
+        logv = sum((lin[k] * e[k] for k in range(1, len(e))), lin[0] * e[0]) / tot
+        xdot = kappa * (R @ (ca.exp(logv) * h))
+        return ca.Function(name, [x, alpha, kappa], [xdot], ["x", "alpha", "kappa"], ["xdot"])
