@@ -114,10 +114,20 @@ class TargetField:
         self.hitting_direction = psi
         self.eigenvalues = ev
 
+    def velocity(self, X) -> np.ndarray:
+        """f(x) = sum_k h^k(x) A_k (x - x*): Eq. 5 for a certified model (Eq. 10a makes
+        mu_xdot^k + A_k (x - mu_x^k) = A_k (x - x*)), in the form without cancellation near x*."""
+        from .gmm import responsibilities
+
+        ds = self.ds
+        d = ds.n_dims
+        h = responsibilities(X, ds.priors, ds.means[:, :d], ds.covariances[:, :d, :d])
+        return np.einsum("nk,kij,nj->ni", h, ds.A, X - ds.target)
+
     def __call__(self, X) -> np.ndarray:
-        """h at points X, shape (n, d) or (d,), relative to the ds's coordinates."""
+        """h at points X, shape (n, d) or (d,), in the ds's coordinates; psi* at x* (Eq. 8)."""
         X2, single = _points(X, self.ds.n_dims)
-        F = self.ds.predict(X2)
+        F = self.velocity(X2)
         nrm = np.linalg.norm(F, axis=1)
         out = np.where(nrm[:, None] > _TINY, F / np.maximum(nrm, _TINY)[:, None],
                        self.hitting_direction[None, :])
@@ -127,17 +137,38 @@ class TargetField:
 class StrengthFactor:
     """v(x) > 0 by GMR on (position, log speed) (Eq. 12, in the log domain; footnote 4).
 
+    GMR extrapolates linearly, so outside the demonstrated range of log-speeds [lo, hi] the
+    prediction is saturated smoothly (C1, ``hi + log2 tanh((g - hi) / log2)`` above, likewise
+    below): v stays between half the slowest and twice the fastest demonstrated speed, and is
+    exactly the GMR of Eq. 12 (in log v) inside the range.
+
     Parameters
     ----------
     priors, means, covariances : the joint GMM over (x, log v), shapes (K,), (K, d+1),
         (K, d+1, d+1).
+    log_range : (float, float)
+        Demonstrated range of log v beyond which it saturates (infinite: no saturation).
     """
 
-    def __init__(self, priors, means, covariances) -> None:
+    def __init__(self, priors, means, covariances, log_range=(-np.inf, np.inf)) -> None:
         self.priors = np.asarray(priors, dtype=float)
         self.means = np.asarray(means, dtype=float)
         self.covariances = np.asarray(covariances, dtype=float)
         self.n_dims = self.means.shape[1] - 1
+        self.log_range = (float(log_range[0]), float(log_range[1]))
+
+    def _saturate(self, g, lib=np):
+        """Identity on the demonstrated range [lo, hi] of log v; beyond it, a C1 tanh saturation
+        that never goes more than log 2 past the range."""
+        lo, hi = self.log_range
+        if not (np.isfinite(lo) and np.isfinite(hi)):
+            return g
+        m = float(np.log(2.0))
+        if lib is np:
+            return np.where(g > hi, hi + m * np.tanh((g - hi) / m),
+                            np.where(g < lo, lo + m * np.tanh((g - lo) / m), g))
+        return ca.if_else(g > hi, hi + m * ca.tanh((g - hi) / m),
+                          ca.if_else(g < lo, lo + m * ca.tanh((g - lo) / m), g))
 
     @classmethod
     def fit(cls, positions: np.ndarray, speeds: np.ndarray, n_components: int = 2,
@@ -157,14 +188,15 @@ class StrengthFactor:
         data = np.column_stack([positions, np.log(speeds)])
         gm = GaussianMixture(n_components=int(n_components), covariance_type="full",
                              reg_covar=1e-6, random_state=random_state).fit(data)
-        return cls(gm.weights_, gm.means_, gm.covariances_)
+        return cls(gm.weights_, gm.means_, gm.covariances_,
+                   log_range=(float(np.log(speeds.min())), float(np.log(speeds.max()))))
 
     def __call__(self, X) -> np.ndarray:
         """v at points X, shape (n, d) -> (n,), or (d,) -> float."""
         X2, single = _points(X, self.n_dims)
         d = self.n_dims
         logv = gmr_predict(X2, self.priors, self.means, self.covariances, np.arange(d), [d])
-        v = np.exp(logv[:, 0])
+        v = np.exp(self._saturate(logv[:, 0]))
         return float(v[0]) if single else v
 
 
@@ -448,7 +480,20 @@ class HittingMotion:
         c, s = ca.cos(alpha), ca.sin(alpha)
         R = ca.vertcat(ca.horzcat(c, -s, 0), ca.horzcat(s, c, 0), ca.horzcat(0, 0, 1))
         y = R.T @ x
-        f = self.target_field.ds.to_casadi()(y)
+        ds = self.target_field.ds
+        lp, fk = [], []
+        for k in range(ds.n_components):
+            Sx = ds.covariances[k, :3, :3]
+            Lc = np.linalg.cholesky(Sx)
+            zk = ca.DM(np.linalg.inv(Lc)) @ (y - ca.DM(ds.means[k, :3]))
+            lp.append(float(np.log(ds.priors[k]) - np.sum(np.log(np.diag(Lc))))
+                      - 0.5 * ca.sumsqr(zk))
+            fk.append(ca.DM(ds.A[k]) @ (y - ca.DM(ds.target)))
+        mf = lp[0]
+        for a in lp[1:]:
+            mf = ca.fmax(mf, a)
+        ef = [ca.exp(a - mf) for a in lp]
+        f = sum((fk[k] * ef[k] for k in range(1, len(ef))), fk[0] * ef[0]) / sum(ef[1:], ef[0])
         nf = ca.norm_2(f)
         psi = ca.DM(self.hitting_direction)
         h = ca.if_else(nf > _TINY, f / ca.fmax(nf, _TINY), psi)
@@ -469,5 +514,5 @@ class HittingMotion:
         e = [ca.exp(a - m) for a in logp]
         tot = sum(e[1:], e[0])
         logv = sum((lin[k] * e[k] for k in range(1, len(e))), lin[0] * e[0]) / tot
-        xdot = kappa * (R @ (ca.exp(logv) * h))
+        xdot = kappa * (R @ (ca.exp(sf._saturate(logv, lib=ca)) * h))
         return ca.Function(name, [x, alpha, kappa], [xdot], ["x", "alpha", "kappa"], ["xdot"])

@@ -1,0 +1,145 @@
+"""Hitting motion groundwork (issue 3): target field, strength factor, Eq. 14, resting mode."""
+
+import numpy as np
+import pytest
+
+from seds_casadi import SEDS, Demonstrations
+from seds_casadi.motion import HittingMotion, StrengthFactor, TargetField, rotation_z
+from seds_casadi.putting_demos import generate_putting_demos
+
+
+@pytest.fixture(scope="module")
+def demos():
+    return generate_putting_demos(random_state=0)
+
+
+@pytest.fixture(scope="module")
+def motion(demos):
+    return HittingMotion.fit(demos, n_components=3, random_state=0)
+
+
+def test_generated_demos_reach_the_ball_moving_along_x(demos):
+    assert demos.n_demos == 7 and demos.n_dims == 3
+    for p, v in zip(demos.positions, demos.velocities):
+        np.testing.assert_allclose(p[-1], 0.0, atol=1e-12)
+        speed = np.linalg.norm(v[-1])
+        assert 0.85 < speed < 1.15
+        assert v[-1][0] / speed > np.cos(np.deg2rad(5))
+        assert p[0][0] < -0.25  # starts behind the ball
+        # sampled at 20 Hz: the velocities are the exact derivatives of the positions
+        mid = (p[2:] - p[:-2]) / 0.1
+        np.testing.assert_allclose(mid[:-1], v[1:-2], atol=0.05)
+
+
+def test_target_field_is_unit_everywhere_and_finite_at_the_ball(motion):
+    tf = motion.target_field
+    X = np.random.default_rng(0).standard_normal((200, 3)) * np.logspace(-8, 2, 200)[:, None]
+    H = tf(X)
+    np.testing.assert_allclose(np.linalg.norm(H, axis=1), 1.0, atol=1e-12)
+    np.testing.assert_allclose(tf(np.zeros(3)), motion.hitting_direction)
+    assert np.all(np.isfinite(tf(np.full(3, 1e-300))))
+    # psi* is the slowest eigenvector of df/dx at the ball, along the demonstrated hit (+x)
+    J = tf.jacobian
+    lam = tf.eigenvalues[np.argmax(tf.eigenvalues.real)].real
+    np.testing.assert_allclose(J @ motion.hitting_direction, lam * motion.hitting_direction,
+                               atol=1e-8)
+    assert motion.hitting_direction[0] > np.cos(np.deg2rad(10))
+
+
+def test_strength_factor_is_positive_far_from_the_data(motion, demos):
+    X = np.random.default_rng(1).standard_normal((500, 3)) * 50.0
+    v = motion.strength(X)
+    assert np.all(v > 0) and np.all(np.isfinite(v))
+    assert motion.hitting_speed == pytest.approx(
+        np.mean([np.linalg.norm(u[-1]) for u in demos.velocities]), rel=0.15)
+
+
+def test_eq14_equals_a_direct_evaluation(motion):
+    rng = np.random.default_rng(2)
+    f_ca = motion.to_casadi()
+    for _ in range(20):
+        a, k = rng.uniform(-np.pi, np.pi), rng.uniform(0.3, 2.0)
+        x = rng.uniform(-0.5, 0.3, 3)
+        R = np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]])
+        y = R.T @ x
+        f = motion.target_field.ds.predict(y)
+        direct = k * R @ (motion.strength(y) * f / np.linalg.norm(f))
+        np.testing.assert_allclose(motion.velocity(x, a, k), direct, rtol=1e-10, atol=1e-12)
+        np.testing.assert_allclose(np.asarray(f_ca(x, a, k)).ravel(), direct, rtol=1e-9,
+                                   atol=1e-12)
+    X = rng.uniform(-0.5, 0.3, (7, 3))
+    V = motion.velocity(X, 0.3, 1.2)
+    for x, v in zip(X, V):
+        np.testing.assert_allclose(motion.velocity(x, 0.3, 1.2), v)
+
+
+def test_rollout_hits_with_the_commanded_speed(motion, demos):
+    for p in demos.positions:
+        r = motion.rollout(p[0], alpha=np.deg2rad(10), kappa=1.3)
+        assert r.hit
+        assert abs(r.speed_error) < 0.02
+        assert np.linalg.norm(r.hit_position) < 0.02
+        # after the hit the resting mode brings the club to rest
+        assert np.linalg.norm(r.velocities[-1]) < 0.2 * np.linalg.norm(r.hit_velocity)
+
+
+def test_rollout_follows_a_ball_moved_mid_swing(motion, demos):
+    start = demos.positions[0][0]
+    moved = np.array([0.0, 0.05, 0.0])
+    r = motion.rollout(start, perturb=[{"t": 0.3, "ball": moved}])
+    assert r.hit
+    assert np.linalg.norm(r.hit_position - moved) < 0.02
+    assert r.events and r.events[0]["t"] == 0.3
+
+
+@pytest.mark.parametrize("mode", ["flat", "arc"])
+def test_resting_mode_is_continuous_at_the_hit_and_stable(motion, mode):
+    p, v = np.zeros(3), motion.hitting_velocity(0.2, 1.0)
+    np.testing.assert_allclose(motion.resting_velocity(p, p, v, mode), v, atol=1e-12)
+    A, rest = motion._rest_system(p, v, mode)
+    assert np.linalg.eigvalsh(A + A.T).max() < 0
+    if mode == "arc":
+        assert rest[2] > 0  # the club ends above the ball's height
+
+
+def test_bad_inputs(motion, demos):
+    with pytest.raises(ValueError, match="kappa"):
+        motion.velocity(np.zeros(3), 0.0, 0.0)
+    with pytest.raises(ValueError, match="kappa"):
+        motion.velocity(np.zeros(3), 0.0, -1.0)
+    with pytest.raises(ValueError, match="alpha"):
+        motion.velocity(np.zeros(3), np.nan, 1.0)
+    with pytest.raises(ValueError, match="NaN"):
+        motion.rollout([np.nan, 0, 0])
+    with pytest.raises(ValueError, match="resting mode"):
+        motion.rollout(demos.positions[0][0], rest_mode="stop")
+    # demonstrations that stop at the ball: no hitting motion to learn
+    s = np.linspace(0, 1, 20)[:, None]
+    stop = Demonstrations([-0.4 * (1 - s) ** 2 * np.array([1.0, 0.2, 0.1])],
+                          velocities=[0.8 * (1 - s) * np.array([1.0, 0.2, 0.1])],
+                          target=np.zeros(3))
+    with pytest.raises(ValueError, match="no hitting motion"):
+        HittingMotion.fit(stop)
+    with pytest.raises(ValueError, match="3-D"):
+        HittingMotion.fit(Demonstrations([np.stack([np.linspace(-1, 0, 9)] * 2, 1)], dt=0.1,
+                                         target=np.zeros(2)))
+    with pytest.raises(TypeError, match="StableDS"):
+        TargetField("not a model")
+    with pytest.raises(ValueError, match="positive"):
+        StrengthFactor.fit(np.zeros((3, 3)), np.array([1.0, 0.0, 1.0]))
+
+
+def test_a_spiralling_model_has_no_target_field():
+    from conftest import linear_demos
+
+    A = np.array([[-1.0, -3.0], [3.0, -1.0]])
+    d = linear_demos(A, np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.3]]), dt=0.05, steps=40)
+    ds = SEDS(1, objective="mse", random_state=0).fit(d)
+    with pytest.raises(ValueError, match="spirals"):
+        TargetField(ds)
+
+
+def test_rotation_is_about_z():
+    R = rotation_z(0.7)
+    np.testing.assert_allclose(R @ R.T, np.eye(3), atol=1e-15)
+    np.testing.assert_allclose(R @ [0, 0, 1.0], [0, 0, 1.0])
