@@ -107,3 +107,37 @@ def gmr_predict(
     dev = means_k - mean[None]
     cov += np.einsum("nk,kno,knp->nop", h, dev, dev)
     return mean, cov
+
+
+def responsibilities_casadi(x, priors: np.ndarray, means: np.ndarray, covariances: np.ndarray):
+    """Posterior weights h^k(x) of Eq. 6 as CasADi SX expressions of a symbolic point x.
+
+    Same log-sum-exp stabilisation as :func:`responsibilities` (numeric GMM, symbolic x).
+
+    Parameters
+    ----------
+    x : casadi.SX, shape (d, 1)
+    priors : array, shape (K,)
+    means : array, shape (K, d)
+    covariances : array, shape (K, d, d)
+
+    Returns
+    -------
+    list of casadi.SX
+        The K weights, summing to one.
+    """
+    import casadi as ca
+
+    logp = []
+    for k in range(len(priors)):
+        L = np.linalg.cholesky(covariances[k])
+        z = ca.DM(np.linalg.inv(L)) @ (x - ca.DM(means[k]))
+        logp.append(float(np.log(priors[k]) - np.sum(np.log(np.diag(L)))) - 0.5 * ca.sumsqr(z))
+    m = logp[0]
+    for a in logp[1:]:
+        m = ca.fmax(m, a)
+    e = [ca.exp(a - m) for a in logp]
+    total = e[0]
+    for v in e[1:]:
+        total = total + v
+    return [v / total for v in e]

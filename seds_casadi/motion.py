@@ -32,7 +32,7 @@ import casadi as ca
 import numpy as np
 
 from .demonstrations import Demonstrations
-from .gmm import gmr_predict
+from .gmm import gmr_predict, responsibilities_casadi
 from .seds import SEDS
 from .stable_ds import StableDS
 
@@ -481,38 +481,19 @@ class HittingMotion:
         R = ca.vertcat(ca.horzcat(c, -s, 0), ca.horzcat(s, c, 0), ca.horzcat(0, 0, 1))
         y = R.T @ x
         ds = self.target_field.ds
-        lp, fk = [], []
+        hw = responsibilities_casadi(y, ds.priors, ds.means[:, :3], ds.covariances[:, :3, :3])
+        f = ca.SX.zeros(3, 1)
         for k in range(ds.n_components):
-            Sx = ds.covariances[k, :3, :3]
-            Lc = np.linalg.cholesky(Sx)
-            zk = ca.DM(np.linalg.inv(Lc)) @ (y - ca.DM(ds.means[k, :3]))
-            lp.append(float(np.log(ds.priors[k]) - np.sum(np.log(np.diag(Lc))))
-                      - 0.5 * ca.sumsqr(zk))
-            fk.append(ca.DM(ds.A[k]) @ (y - ca.DM(ds.target)))
-        mf = lp[0]
-        for a in lp[1:]:
-            mf = ca.fmax(mf, a)
-        ef = [ca.exp(a - mf) for a in lp]
-        f = sum((fk[k] * ef[k] for k in range(1, len(ef))), fk[0] * ef[0]) / sum(ef[1:], ef[0])
+            f = f + hw[k] * (ca.DM(ds.A[k]) @ (y - ca.DM(ds.target)))
         nf = ca.norm_2(f)
         psi = ca.DM(self.hitting_direction)
         h = ca.if_else(nf > _TINY, f / ca.fmax(nf, _TINY), psi)
         sf = self.strength
         d = 3
-        logp, lin = [], []
+        hs = responsibilities_casadi(y, sf.priors, sf.means[:, :d], sf.covariances[:, :d, :d])
+        logv = 0
         for k in range(len(sf.priors)):
-            Sxx = sf.covariances[k, :d, :d]
-            L = np.linalg.cholesky(Sxx)
-            z = ca.DM(np.linalg.inv(L)) @ (y - ca.DM(sf.means[k, :d]))
-            logp.append(float(np.log(sf.priors[k]) - np.sum(np.log(np.diag(L))))
-                        - 0.5 * ca.sumsqr(z))
-            gain = np.linalg.solve(Sxx, sf.covariances[k, :d, d])
-            lin.append(sf.means[k, d] + ca.dot(ca.DM(gain), y - ca.DM(sf.means[k, :d])))
-        m = logp[0]
-        for a in logp[1:]:
-            m = ca.fmax(m, a)
-        e = [ca.exp(a - m) for a in logp]
-        tot = sum(e[1:], e[0])
-        logv = sum((lin[k] * e[k] for k in range(1, len(e))), lin[0] * e[0]) / tot
+            gain = np.linalg.solve(sf.covariances[k, :d, :d], sf.covariances[k, :d, d])
+            logv = logv + hs[k] * (sf.means[k, d] + ca.dot(ca.DM(gain), y - ca.DM(sf.means[k, :d])))
         xdot = kappa * (R @ (ca.exp(sf._saturate(logv, lib=ca)) * h))
         return ca.Function(name, [x, alpha, kappa], [xdot], ["x", "alpha", "kappa"], ["xdot"])

@@ -26,7 +26,7 @@ import casadi as ca
 import numpy as np
 
 from .errors import ModelFileError, StabilityError
-from .gmm import responsibilities
+from .gmm import responsibilities, responsibilities_casadi
 
 __all__ = ["StableDS", "certify"]
 
@@ -258,21 +258,11 @@ class StableDS:
         """A CasADi Function x (d,) -> f(x) (d,), for code generation or use in optimal control."""
         d, K = self.n_dims, self.n_components
         x = ca.SX.sym("x", d)
-        logp = []
-        lin = []
+        h = responsibilities_casadi(x, self.priors, self.means[:, :d], self.covariances[:, :d, :d])
+        f = ca.SX.zeros(d, 1)
         for k in range(K):
-            Sx = self.covariances[k, :d, :d]
-            Linv = np.linalg.inv(np.linalg.cholesky(Sx))
-            z = ca.DM(Linv) @ (x - ca.DM(self.means[k, :d]))
-            logdet = 2.0 * float(np.sum(np.log(np.diag(np.linalg.cholesky(Sx)))))
-            logp.append(np.log(self.priors[k]) - 0.5 * (ca.sumsqr(z) + logdet))
-            lin.append(ca.DM(self.means[k, d:]) + ca.DM(self.A[k]) @ (x - ca.DM(self.means[k, :d])))
-        m = logp[0]
-        for a in logp[1:]:
-            m = ca.fmax(m, a)
-        e = [ca.exp(a - m) for a in logp]
-        s = sum(e[1:], e[0])
-        f = sum((lin[k] * (e[k] / s) for k in range(1, K)), lin[0] * (e[0] / s))
+            lin = ca.DM(self.means[k, d:]) + ca.DM(self.A[k]) @ (x - ca.DM(self.means[k, :d]))
+            f = f + h[k] * lin
         return ca.Function(name, [x], [f], ["x"], ["xdot"])
 
     # ------------------------------------------------------------ persistence
