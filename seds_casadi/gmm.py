@@ -8,7 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["log_gaussian", "responsibilities", "gmr_predict"]
+__all__ = ["log_gaussian", "responsibilities", "gmr_predict", "responsibilities_casadi",
+           "logsumexp_parts_sx"]
 
 _LOG_2PI = float(np.log(2.0 * np.pi))
 
@@ -133,6 +134,17 @@ def responsibilities_casadi(x, priors: np.ndarray, means: np.ndarray, covariance
         L = np.linalg.cholesky(covariances[k])
         z = ca.DM(np.linalg.inv(L)) @ (x - ca.DM(means[k]))
         logp.append(float(np.log(priors[k]) - np.sum(np.log(np.diag(L)))) - 0.5 * ca.sumsqr(z))
+    _, e, total = logsumexp_parts_sx(logp)
+    return [v / total for v in e]
+
+
+def logsumexp_parts_sx(logp: list):
+    """Stabilised pieces of log-sum-exp over a list of SX terms: (m, [exp(a - m)], sum).
+
+    log sum_k exp(a_k) = m + log(sum); m = max_k a_k keeps every exponential in (0, 1].
+    """
+    import casadi as ca
+
     m = logp[0]
     for a in logp[1:]:
         m = ca.fmax(m, a)
@@ -140,4 +152,4 @@ def responsibilities_casadi(x, priors: np.ndarray, means: np.ndarray, covariance
     total = e[0]
     for v in e[1:]:
         total = total + v
-    return [v / total for v in e]
+    return m, e, total

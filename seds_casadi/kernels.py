@@ -25,6 +25,7 @@ import threading
 import casadi as ca
 import numpy as np
 
+from .gmm import logsumexp_parts_sx
 from .parametrization import DIRECTION_EPS, Layout
 
 __all__ = ["sample_objective", "SumKernels", "compiler_available", "cache_folder"]
@@ -113,13 +114,7 @@ def sample_objective(layout: Layout, objective: str, margin: float) -> ca.Functi
             a = a - 0.5 * (ca.sumsqr(r) + p["logdetQ"][k] + d * _LOG_2PI)
         logp.append(a)
         fk.append(F)
-    m = logp[0]
-    for a in logp[1:]:
-        m = ca.fmax(m, a)
-    e = [ca.exp(a - m) for a in logp]
-    s = e[0]
-    for v in e[1:]:
-        s = s + v
+    m, e, s = logsumexp_parts_sx(logp)
     if objective == "likelihood":
         g = -c * (m + ca.log(s))
     else:
@@ -264,85 +259,53 @@ class SumKernels:
         return _Objective(self)
 
 
-class _Hessian(ca.Callback):
-    def __init__(self, k: SumKernels) -> None:
+class _Callback(ca.Callback):
+    """A CasADi callback with one dense output, optionally with a Jacobian factory."""
+
+    def __init__(self, name: str, sp_in: list, sp_out, fn, jacobian=None) -> None:
         ca.Callback.__init__(self)
-        self.k = k
-        self.construct("seds_hess", {})
+        self._sp_in, self._sp_out, self._fn, self._jac = sp_in, sp_out, fn, jacobian
+        self._keep = []  # callbacks created for derivatives must outlive this one
+        self.construct(name, {})
 
     def get_n_in(self):
-        return 2
+        return len(self._sp_in)
 
     def get_n_out(self):
         return 1
 
     def get_sparsity_in(self, i):
-        return ca.Sparsity.dense(self.k.size, 1) if i == 0 else ca.Sparsity.dense(1, 1)
+        return self._sp_in[i]
 
     def get_sparsity_out(self, i):
-        return ca.Sparsity.dense(self.k.size, self.k.size)
+        return self._sp_out
 
     def eval(self, arg):
-        return [self.k.hessian(arg[0])]
-
-
-class _Gradient(ca.Callback):
-    def __init__(self, k: SumKernels) -> None:
-        ca.Callback.__init__(self)
-        self.k = k
-        self.construct("seds_grad", {})
-
-    def get_n_in(self):
-        return 2
-
-    def get_n_out(self):
-        return 1
-
-    def get_sparsity_in(self, i):
-        return ca.Sparsity.dense(self.k.size, 1) if i == 0 else ca.Sparsity.dense(1, 1)
-
-    def get_sparsity_out(self, i):
-        return ca.Sparsity.dense(1, self.k.size)
-
-    def eval(self, arg):
-        return [self.k.gradient(arg[0]).reshape(1, -1)]
+        return [self._fn(arg[0])]
 
     def has_jacobian(self):
-        return True
+        return self._jac is not None
 
     def get_jacobian(self, name, inames, onames, opts):
-        self._hess = _Hessian(self.k)
-        P = self.k.size
-        x = ca.MX.sym("x", P)
-        o = ca.MX.sym("o", 1)
-        out = ca.MX.sym("out", 1, P)
-        return ca.Function(name, [x, o, out], [self._hess(x, o), ca.MX(P, 1)],
-                           inames, onames, opts)
+        return self._jac(self._keep, name, inames, onames, opts)
 
 
-class _Objective(ca.Callback):
-    def __init__(self, k: SumKernels) -> None:
-        ca.Callback.__init__(self)
-        self.k = k
-        self.construct("seds_obj", {})
+def _Objective(k: SumKernels) -> _Callback:
+    """J as a callback whose Jacobian is the gradient kernel, whose Jacobian is the Hessian."""
+    P = k.size
+    col, one, row = ca.Sparsity.dense(P, 1), ca.Sparsity.dense(1, 1), ca.Sparsity.dense(1, P)
 
-    def get_n_in(self):
-        return 1
+    def hess_jac(keep, name, inames, onames, opts):
+        hess = _Callback("seds_hess", [col, one], ca.Sparsity.dense(P, P), k.hessian)
+        keep.append(hess)
+        x, o, out = ca.MX.sym("x", P), ca.MX.sym("o", 1), ca.MX.sym("out", 1, P)
+        return ca.Function(name, [x, o, out], [hess(x, o), ca.MX(P, 1)], inames, onames, opts)
 
-    def get_n_out(self):
-        return 1
+    def grad_jac(keep, name, inames, onames, opts):
+        grad = _Callback("seds_grad", [col, one], row,
+                         lambda t: k.gradient(t).reshape(1, -1), jacobian=hess_jac)
+        keep.append(grad)
+        x, o = ca.MX.sym("x", P), ca.MX.sym("o", 1)
+        return ca.Function(name, [x, o], [grad(x, o)], inames, onames, opts)
 
-    def get_sparsity_in(self, i):
-        return ca.Sparsity.dense(self.k.size, 1)
-
-    def eval(self, arg):
-        return [self.k.value(arg[0])]
-
-    def has_jacobian(self):
-        return True
-
-    def get_jacobian(self, name, inames, onames, opts):
-        self._grad = _Gradient(self.k)
-        x = ca.MX.sym("x", self.k.size)
-        o = ca.MX.sym("o", 1)
-        return ca.Function(name, [x, o], [self._grad(x, o)], inames, onames, opts)
+    return _Callback("seds_obj", [col], one, k.value, jacobian=grad_jac)
