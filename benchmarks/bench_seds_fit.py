@@ -74,6 +74,7 @@ def main():
     ap.add_argument("--baseline-shapes", nargs="+", default=["Angle", "CShape", "GShape"])
     ap.add_argument("-K", type=int, default=5)
     ap.add_argument("--samples", type=int, default=100)
+    ap.add_argument("--skip-baseline", action="store_true", help="only part 1")
     args = ap.parse_args()
 
     print(f"Part 1: direction objective, K={args.K}, {args.samples} samples per demonstration")
@@ -92,6 +93,8 @@ def main():
         print("  e_dot on training data: " + ", ".join(f"{r[0]} {r[3]:.4f}" for r in named)
               + f"; mean {np.mean([r[3] for r in named]):.4f}")
 
+    if args.skip_baseline:
+        return
     print("\nPart 2: same problem, SciPy SLSQP with finite-difference gradients (same start)")
     print(f"  {'shape':<10} {'objective':<10} {'ours s':>8} {'scipy s':>8} {'ratio':>7} "
           f"{'J ours':>12} {'J scipy':>12}")
