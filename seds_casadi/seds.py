@@ -362,6 +362,9 @@ class SEDS:
             "ipopt.sb": "yes",
             "ipopt.max_iter": self.max_iter,
             "ipopt.tol": self.tol,
+            # only simple bounds and an interior start: a small initial barrier parameter saves
+            # about 40 % of the iterations on LASA at the same accuracy (measured, see README)
+            "ipopt.mu_init": 1e-4,
             "ipopt.acceptable_tol": 1e-2,
             "ipopt.acceptable_obj_change_tol": self.tol_objective_change,
             "ipopt.acceptable_iter": 5,
