@@ -116,7 +116,7 @@ class SEDSProblem:
         else:
             h = responsibilities(self.X, p["priors"], p["mu"], p["Sx"])
             if self.objective == "direction":
-                p["A"] = p["A"] * self.speed_factor(theta)
+                p["A"] = p["A"] * _speed_factor(p["A"], h, self.X, self.Xd)
             Q = np.empty((K, d, d))
             for k in range(K):
                 r = self.Xd - self.X @ p["A"][k].T
