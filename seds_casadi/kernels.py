@@ -28,7 +28,8 @@ import numpy as np
 from .gmm import logsumexp_parts_sx
 from .parametrization import DIRECTION_EPS, Layout
 
-__all__ = ["sample_objective", "SumKernels", "compiler_available", "cache_folder"]
+__all__ = ["sample_objective", "SumKernels", "compiler_available", "cache_folder",
+           "approach_constraints"]
 
 _LOG_2PI = float(np.log(2.0 * np.pi))
 _LOCK = threading.Lock()
@@ -128,6 +129,47 @@ def sample_objective(layout: Layout, objective: str, margin: float) -> ca.Functi
         else:
             raise ValueError(f"unknown objective {objective!r}")
     return ca.Function("g", [theta, x, xd, c], [g], ["theta", "x", "xd", "c"], ["g"])
+
+
+def approach_constraints(layout: Layout, margin: float, direction: np.ndarray,
+                         ratio: float) -> ca.Function:
+    """Constraints that make ``direction`` the slowest way into the target (optional extension).
+
+    With J = sum_k h^k(x*) A_k the linearisation of f at x* (scaled attractor frame, x* = 0),
+    u = direction (unit) and Q an orthonormal basis of the plane perpendicular to u:
+
+    * ``Q^T J u = 0`` (d-1 equalities): u is an eigenvector of J, with rate lambda = -u^T J u > 0;
+    * ``S = -(M + M^T)/2 - ratio * lambda * I``, M = Q^T J Q, positive definite through its
+      leading principal minors m_i (Sylvester), asked as m_i / lambda^(i-1) >= 0.05 lambda
+      (d-1 inequalities in the units of lambda): motion across u decays at least ``ratio`` times
+      faster than along it.
+
+    Then trajectories line up with u as r^(ratio - 1) while they approach x*, so the target field's
+    limit (Eq. 8, 13) is u and is reached quickly. The paper has no such constraint: it is offered
+    for hitting motions, whose direction at the ball must not depend on where the swing starts.
+
+    Returns
+    -------
+    casadi.Function
+        theta -> g, with equalities first (``d - 1`` of them, bounds 0) then the minors (>= 0).
+    """
+    d = layout.d
+    u = np.asarray(direction, dtype=float).ravel()
+    u = u / np.linalg.norm(u)
+    Q = np.linalg.svd(np.eye(d) - np.outer(u, u))[0][:, : d - 1]
+    theta = ca.SX.sym("theta", layout.size)
+    p = unpack_casadi(theta, layout, margin)
+    logp = [p["logpi"][k] - 0.5 * (ca.sumsqr(p["Linv"][k] @ p["mu"][k]) + p["logdet"][k])
+            for k in range(layout.K)]
+    _, e, tot = logsumexp_parts_sx(logp)
+    J = sum((p["A"][k] * (e[k] / tot) for k in range(1, layout.K)), p["A"][0] * (e[0] / tot))
+    lam = -ca.dot(ca.DM(u), J @ ca.DM(u))
+    eq = ca.DM(Q).T @ J @ ca.DM(u)
+    M = ca.DM(Q).T @ J @ ca.DM(Q)
+    S = -(M + M.T) / 2 - ratio * lam * ca.DM.eye(d - 1)
+    # Sylvester: S positive definite iff its leading minors are > 0; ask for a margin of 5 %
+    minors = [ca.det(S[:i, :i]) / lam ** (i - 1) - 0.05 * lam for i in range(1, d)]
+    return ca.Function("approach", [theta], [ca.vertcat(eq, *minors)])
 
 
 def compiler_available() -> str | None:

@@ -22,7 +22,7 @@ import numpy as np
 from .demonstrations import Demonstrations
 from .errors import ConvergenceWarning, SolverError
 from .gmm import responsibilities
-from .kernels import SumKernels
+from .kernels import SumKernels, approach_constraints
 from .parametrization import OBJECTIVES, Layout, unpack_numpy
 from .stable_ds import StableDS
 
@@ -226,6 +226,11 @@ class SEDS:
     compile : bool, default True
         Compile the per-sample kernels to C when a C compiler is found (cached on disk; see
         :mod:`seds_casadi.kernels`); otherwise CasADi's virtual machine evaluates them.
+    approach_direction : array, shape (d,), optional
+        If given, constrain the model so that this direction is the slowest way into the target,
+        with motion across it at least ``approach_ratio`` times faster (an extension of the paper
+        for hitting motions; see :func:`seds_casadi.kernels.approach_constraints`).
+    approach_ratio : float, default 4.0
     verbose : bool, default False
         Print IPOPT's iteration log.
     """
@@ -244,6 +249,8 @@ class SEDS:
         hessian: str = "exact",
         require_convergence: bool = False,
         compile: bool = True,
+        approach_direction=None,
+        approach_ratio: float = 4.0,
         verbose: bool = False,
     ) -> None:
         if isinstance(n_components, bool) or not isinstance(n_components, (int, np.integer)):
@@ -278,6 +285,15 @@ class SEDS:
         self.hessian = hessian
         self.require_convergence = bool(require_convergence)
         self.verbose = bool(verbose)
+        if approach_direction is not None:
+            u = np.asarray(approach_direction, dtype=float).ravel()
+            if not (np.all(np.isfinite(u)) and np.linalg.norm(u) > 0):
+                raise ValueError("approach_direction must be a finite non-zero vector")
+            approach_direction = u / np.linalg.norm(u)
+        if not (np.isfinite(approach_ratio) and approach_ratio >= 1):
+            raise ValueError(f"approach_ratio must be >= 1, got {approach_ratio}")
+        self.approach_direction = approach_direction
+        self.approach_ratio = float(approach_ratio)
 
     def build_problem(self, demos: Demonstrations) -> SEDSProblem:
         """Scale the data, initialise by k-means + EM and build the CasADi problem."""
@@ -372,9 +388,21 @@ class SEDS:
         }
         theta_sym = ca.MX.sym("theta", prob.layout.size)
         objective = prob.kernels.nlp_objective()  # keep alive while the solver runs
-        solver = ca.nlpsol("seds", "ipopt", {"x": theta_sym, "f": objective(theta_sym)}, opts)
+        nlp = {"x": theta_sym, "f": objective(theta_sym)}
+        bounds = {}
+        if self.approach_direction is not None:
+            u = self.approach_direction
+            if u.shape != (prob.layout.d,):
+                raise ValueError(f"approach_direction has {u.shape[0]} entries for "
+                                 f"{prob.layout.d}-D demonstrations")
+            g = approach_constraints(prob.layout, prob.margin, u, self.approach_ratio)
+            nlp["g"] = g(theta_sym)
+            d = prob.layout.d
+            bounds = {"lbg": np.zeros(2 * (d - 1)),
+                      "ubg": np.r_[np.zeros(d - 1), np.full(d - 1, np.inf)]}
+        solver = ca.nlpsol("seds", "ipopt", nlp, opts)
         t_built = time.perf_counter()
-        res = solver(x0=prob.theta0, lbx=prob.lbx, ubx=prob.ubx)
+        res = solver(x0=prob.theta0, lbx=prob.lbx, ubx=prob.ubx, **bounds)
         stats = solver.stats()
         status = str(stats.get("return_status", "unknown"))
         theta = np.asarray(res["x"]).ravel()

@@ -244,3 +244,29 @@ def test_rollout_and_predict_bad_input(fitted):
         model.predict(np.zeros((3, 5)))
     with pytest.raises(ValueError, match="dt must be positive"):
         model.rollout([1.0, 1.0], dt=0.0)
+
+
+def test_approach_constraint_holds_after_fitting(curved_demos_3d):
+    """The optional arrival constraint: u is an eigenvector of J = sum_k h_k(x*) A_k, and the
+    symmetric part of J across u is at least `ratio` times faster than the rate along u."""
+    from seds_casadi.gmm import responsibilities
+
+    u = np.array([1.0, -0.4, 0.2])
+    u /= np.linalg.norm(u)
+    model = SEDS(2, random_state=0, approach_direction=u, approach_ratio=3.0).fit(curved_demos_3d)
+    _assert_certified(model)
+    h = responsibilities(model.target[None], model.priors, model.means[:, :3],
+                         model.covariances[:, :3, :3])[0]
+    J = np.einsum("k,kij->ij", h, model.A)
+    lam = -u @ J @ u
+    assert lam > 0
+    np.testing.assert_allclose(J @ u, -lam * u, atol=1e-6 * np.abs(J).max())
+    Q = np.linalg.svd(np.eye(3) - np.outer(u, u))[0][:, :2]
+    M = Q.T @ J @ Q
+    assert np.linalg.eigvalsh(0.5 * (M + M.T)).max() <= -3.0 * lam * (1 - 1e-6)
+    with pytest.raises(ValueError, match="approach_ratio"):
+        SEDS(2, approach_direction=u, approach_ratio=0.5)
+    with pytest.raises(ValueError, match="approach_direction"):
+        SEDS(2, approach_direction=[0.0, 0.0, 0.0])
+    with pytest.raises(ValueError, match="entries"):
+        SEDS(2, approach_direction=[1.0, 0.0]).fit(curved_demos_3d)
