@@ -29,7 +29,7 @@ from .gmm import logsumexp_parts_sx
 from .parametrization import DIRECTION_EPS, Layout
 
 __all__ = ["sample_objective", "SumKernels", "compiler_available", "cache_folder",
-           "approach_constraints"]
+           "approach_constraints", "FastEvaluator", "compile_functions"]
 
 _LOG_2PI = float(np.log(2.0 * np.pi))
 _LOCK = threading.Lock()
@@ -184,6 +184,47 @@ def cache_folder() -> str:
     root = os.environ.get("SEDS_CASADI_CACHE") or os.path.join(
         os.path.expanduser("~"), ".cache", "seds_casadi")
     return root
+
+
+def compile_functions(funcs: list[ca.Function]) -> list[ca.Function]:
+    """Compile CasADi Functions to C (one shared library, cached by source hash) and load them.
+
+    Returns the functions unchanged when no compiler is available or compilation fails.
+    """
+    return _compile(funcs)
+
+
+class FastEvaluator:
+    """Low-overhead calls of a CasADi Function through fixed numpy buffers (``Function.buffer``).
+
+    About 0.2 us of call overhead instead of about 10-30 us for ``f(x)`` from Python. Not
+    thread-safe: use one evaluator per thread.
+
+    Parameters
+    ----------
+    f : casadi.Function
+        Dense inputs and outputs.
+    """
+
+    def __init__(self, f: ca.Function) -> None:
+        self.function = f
+        self._in = [np.zeros(f.nnz_in(i)) for i in range(f.n_in())]
+        self._out = [np.zeros(f.nnz_out(i)) for i in range(f.n_out())]
+        self._buf, self._eval = f.buffer()
+        for i, a in enumerate(self._in):
+            self._buf.set_arg(i, memoryview(a))
+        for i, a in enumerate(self._out):
+            self._buf.set_res(i, memoryview(a))
+
+    def __call__(self, *args) -> np.ndarray:
+        """Evaluate; returns a copy of the first output as a flat array."""
+        if len(args) != len(self._in):
+            raise TypeError(f"{self.function.name()} takes {len(self._in)} arguments, "
+                            f"got {len(args)}")
+        for a, v in zip(self._in, args):
+            a[...] = v
+        self._eval()
+        return self._out[0].copy()
 
 
 def _compile(funcs: list[ca.Function]) -> list[ca.Function]:

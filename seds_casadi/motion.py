@@ -485,6 +485,17 @@ class HittingMotion:
                              p_hit, v_hit, psi, spd, events=applied)
 
     # ------------------------------------------------------------ CasADi
+    def compiled(self):
+        """Eq. 14 compiled to C and called through fixed buffers, for a real-time loop.
+
+        Returns a callable ``(x, alpha, kappa) -> xdot`` (x of shape (3,), relative to the ball),
+        about 2 us per call here against about 450 us for :meth:`velocity`; it falls back to
+        CasADi's virtual machine without a C compiler. Not thread-safe.
+        """
+        from .kernels import FastEvaluator, compile_functions
+
+        return FastEvaluator(compile_functions([self.to_casadi()])[0])
+
     def to_casadi(self, name: str = "hitting_ds") -> ca.Function:
         """Eq. 14 as a CasADi Function (x (3,), alpha, kappa) -> xdot (3,), for code generation.
 

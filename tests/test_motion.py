@@ -143,3 +143,35 @@ def test_rotation_is_about_z():
     R = rotation_z(0.7)
     np.testing.assert_allclose(R @ R.T, np.eye(3), atol=1e-15)
     np.testing.assert_allclose(R @ [0, 0, 1.0], [0, 0, 1.0])
+
+
+def test_shipped_hitting_demos_are_the_generator_output():
+    from seds_casadi.datasets import HITTING_DEMOS_FILE, load_hitting_demos
+
+    shipped = load_hitting_demos()
+    made = generate_putting_demos(random_state=0)
+    assert shipped.n_demos == 7
+    for a, b in zip(shipped.positions, made.positions):
+        np.testing.assert_allclose(a, b, atol=1e-12)
+    for a, b in zip(shipped.velocities, made.velocities):
+        np.testing.assert_allclose(a, b, atol=1e-12)
+    assert HITTING_DEMOS_FILE.endswith(".npz")
+
+
+def test_ball_moved_mid_swing_is_hit_along_the_commanded_direction(motion, demos):
+    for dy in (0.05, -0.05):
+        moved = np.array([0.0, dy, 0.0])
+        r = motion.rollout(demos.positions[3][0], perturb=[{"t": 0.25, "ball": moved}])
+        assert r.hit and np.linalg.norm(r.hit_position - moved) < 1e-3
+        assert r.direction_error_deg < 5.0
+
+
+def test_compiled_hitting_ds_matches_numpy(motion):
+    fast = motion.compiled()
+    rng = np.random.default_rng(4)
+    for _ in range(10):
+        x, a, k = rng.uniform(-0.4, 0.2, 3), rng.uniform(-0.5, 0.5), rng.uniform(0.5, 1.5)
+        np.testing.assert_allclose(fast(x, a, k), motion.velocity(x, a, k), rtol=1e-9,
+                                   atol=1e-12)
+    with pytest.raises(TypeError, match="arguments"):
+        fast(np.zeros(3))

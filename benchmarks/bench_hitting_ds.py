@@ -1,0 +1,79 @@
+"""Benchmark: one evaluation of the steered hitting DS (Eq. 14) from Python.
+
+Times, side by side in one run: the numpy path (``HittingMotion.velocity`` at one point), the
+CasADi Function from ``to_casadi()`` in CasADi's virtual machine, and the same Function compiled
+to C (code generation + the system compiler) and loaded with ``casadi.external``.
+
+Usage: python benchmarks/bench_hitting_ds.py [--repeat 20000]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import subprocess
+import tempfile
+import time
+
+import casadi as ca
+import numpy as np
+
+from seds_casadi.datasets import load_hitting_demos
+from seds_casadi.motion import HittingMotion
+
+
+def median_us(fn, repeat: int) -> float:
+    times = np.empty(repeat)
+    for i in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        times[i] = time.perf_counter() - t0
+    return float(np.median(times) * 1e6)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=20000)
+    args = ap.parse_args()
+    motion = HittingMotion.fit(load_hitting_demos())
+    x = np.array([-0.3, 0.05, 0.1])
+    alpha, kappa = 0.2, 1.1
+    f = motion.to_casadi()
+    out = {}
+    out["numpy (HittingMotion.velocity)"] = median_us(lambda: motion.velocity(x, alpha, kappa),
+                                                      args.repeat)
+    out["CasADi virtual machine"] = median_us(lambda: f(x, alpha, kappa), args.repeat)
+    cc = shutil.which("cc") or shutil.which("gcc")
+    if cc:
+        tmp = tempfile.mkdtemp()
+        try:
+            gen = ca.CodeGenerator("hitting_ds.c", {"with_header": False})
+            gen.add(f)
+            gen.generate(tmp + os.sep)
+            lib = os.path.join(tmp, "hitting_ds.so")
+            subprocess.run([cc, "-shared", "-fPIC", "-O2", os.path.join(tmp, "hitting_ds.c"),
+                            "-o", lib], check=True)
+            fc = ca.external(f.name(), lib)
+            np.testing.assert_allclose(np.asarray(fc(x, alpha, kappa)).ravel(),
+                                       motion.velocity(x, alpha, kappa), rtol=1e-10)
+            out["compiled C (casadi.external)"] = median_us(lambda: fc(x, alpha, kappa),
+                                                            args.repeat)
+            # the same compiled function called without Python's argument conversion overhead
+            buf_in = [ca.DM(x), ca.DM(alpha), ca.DM(kappa)]
+            out["compiled C, DM arguments"] = median_us(lambda: fc.call(buf_in), args.repeat)
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
+    fast = motion.compiled()
+    np.testing.assert_allclose(fast(x, alpha, kappa), motion.velocity(x, alpha, kappa),
+                               rtol=1e-10)
+    out["HittingMotion.compiled() (buffers)"] = median_us(lambda: fast(x, alpha, kappa),
+                                                          args.repeat)
+    base = out["numpy (HittingMotion.velocity)"]
+    print(f"one evaluation of Eq. 14, median over {args.repeat} calls:")
+    for name, us in out.items():
+        print(f"  {name:<34} {us:8.2f} us   ({base / us:5.1f}x numpy)")
+
+
+if __name__ == "__main__":
+    main()
