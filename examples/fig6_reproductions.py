@@ -1,0 +1,47 @@
+"""Paper Fig. 6 (c)-(f): reproductions of the hitting motion against the demonstrations, and the
+velocity profiles along x, y and z.
+
+python examples/fig6_reproductions.py [--out fig6.png] [--quick]
+"""
+
+import argparse
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+from seds_casadi.datasets import load_hitting_demos  # noqa: E402
+from seds_casadi.motion import HittingMotion  # noqa: E402
+
+ap = argparse.ArgumentParser()
+ap.add_argument("--out", default="fig6.png")
+ap.add_argument("--quick", action="store_true", help="fewer demonstrations for CI")
+args = ap.parse_args()
+
+demos = load_hitting_demos()
+motion = HittingMotion.fit(demos)
+n = 3 if args.quick else demos.n_demos
+fig = plt.figure(figsize=(12, 7))
+ax3 = fig.add_subplot(2, 2, 1, projection="3d")
+axes = [fig.add_subplot(2, 2, i) for i in (2, 3, 4)]
+dt_demo = 0.05
+for p, v in list(zip(demos.positions, demos.velocities))[:n]:
+    r = motion.rollout(p[0], rest_time=0.0)
+    swing = r.times <= r.hit_time
+    ax3.plot(*p.T, ".", color="tab:red", ms=3)
+    ax3.plot(*r.positions[swing].T, "-", color="tab:blue", lw=1)
+    t_demo = dt_demo * (len(p) - 1) - dt_demo * (len(p) - 1 - __import__("numpy").arange(len(p)))
+    t_demo = t_demo - t_demo[-1]  # time to the hit
+    t_rep = r.times[swing] - r.hit_time
+    for j, ax in enumerate(axes):
+        ax.plot(t_demo, v[:, j], ".", color="tab:red", ms=3)
+        ax.plot(t_rep, r.velocities[swing, j], "-", color="tab:blue", lw=1)
+ax3.plot([0], [0], [0], "ko")
+ax3.set_title("(c) reproductions (blue) vs demonstrations (red)", fontsize=9)
+for j, (ax, name) in enumerate(zip(axes, "xyz")):
+    ax.set_title(f"({'def'[j]}) velocity along {name} [m/s]", fontsize=9)
+    ax.set_xlabel("time to the hit [s]")
+fig.tight_layout()
+fig.savefig(args.out, dpi=110, bbox_inches="tight")
+print(f"wrote {args.out}")
