@@ -78,6 +78,9 @@ def _points(X, d: int, name: str = "X") -> tuple[np.ndarray, bool]:
 class TargetField:
     """h(x) = f(x)/||f(x)|| (Eq. 8) of a certified StableDS, defined everywhere.
 
+    A StableDS is certified globally asymptotically stable at x* (Eq. 10), so f vanishes nowhere
+    else and h is well defined away from x*; at x* it takes its limit psi* (Eq. 13).
+
     Parameters
     ----------
     ds : StableDS
