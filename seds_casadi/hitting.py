@@ -1,0 +1,169 @@
+"""Learners of the hitting parameters g: s -> (alpha, kappa) (paper Section 5, Eq. 2, 15-18).
+
+The situation s is the hole's position relative to the ball in the hitting plane (2-D). Three
+learners, chosen by name with :func:`make_model`:
+
+* ``"gpr"``: one Gaussian process per output, squared-exponential kernel with one length scale
+  per input dimension plus a noise term, hyperparameters by maximum likelihood (scikit-learn's
+  GaussianProcessRegressor); mean and variance of Eq. 17.
+* ``"gmr"``: one joint GMM over (s, alpha, kappa) fitted by k-means then EM, and GMR (Eq. 18)
+  with the conditional covariance (the outputs' correlation is kept).
+* ``"sep_gmr"``: one GMM per output over (s, output), predicted independently.
+
+Parameters are counted as the paper's Table 1 counts them: a GP stores its M training inputs and
+outputs and d_in + 2 hyperparameters per output (length scales, signal variance, noise); a GMM
+over d dimensions has K + dK + d(d+1)K/2 parameters.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .gmm import gmr_predict
+
+__all__ = ["GPRModel", "GMRModel", "make_model", "MODELS", "gpr_param_count",
+           "gmm_param_count"]
+
+
+def gpr_param_count(n_train: int, n_inputs: int, n_outputs: int) -> int:
+    """Table 1's count for GPR: M d_in + M n_out + n_out (d_in + 2)."""
+    return n_train * n_inputs + n_train * n_outputs + n_outputs * (n_inputs + 2)
+
+
+def gmm_param_count(n_components: int, n_dims: int) -> int:
+    """Parameters of a GMM: K + d K + d (d + 1) K / 2 (priors, means, covariances)."""
+    return n_components * (1 + n_dims + n_dims * (n_dims + 1) // 2)
+
+
+def _check_xy(S, Y, min_samples: int, what: str):
+    S = np.atleast_2d(np.asarray(S, dtype=float))
+    Y = np.asarray(Y, dtype=float)
+    if Y.ndim == 1:
+        Y = Y[:, None]
+    if S.shape[0] != Y.shape[0]:
+        raise ValueError(f"{S.shape[0]} situations for {Y.shape[0]} outputs")
+    if not (np.all(np.isfinite(S)) and np.all(np.isfinite(Y))):
+        raise ValueError("training data contain NaN or infinite values")
+    if S.shape[0] < min_samples:
+        raise ValueError(f"{what} needs at least {min_samples} training points, got {S.shape[0]}")
+    return S, Y
+
+
+class GPRModel:
+    """GPR per output (Eq. 17), squared-exponential kernel with per-dimension length scales.
+
+    Parameters
+    ----------
+    n_restarts : int
+        Restarts of the marginal-likelihood optimiser.
+    random_state : int or None
+    """
+
+    name = "gpr"
+
+    def __init__(self, n_restarts: int = 2, random_state=0) -> None:
+        self.n_restarts = int(n_restarts)
+        self.random_state = random_state
+
+    def fit(self, S, Y) -> GPRModel:
+        """Fit on situations S (M, d_in) and outputs Y (M, n_out); returns self."""
+        from sklearn.gaussian_process import GaussianProcessRegressor
+        from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
+
+        S, Y = _check_xy(S, Y, 2, "GPR")
+        d = S.shape[1]
+        scale = np.maximum(np.ptp(S, axis=0), 1e-6)
+        self.gps_ = []
+        for j in range(Y.shape[1]):
+            kernel = (ConstantKernel(1.0, (1e-3, 1e3))
+                      * RBF(length_scale=scale, length_scale_bounds=(1e-3 * scale.min(),
+                                                                     1e3 * scale.max()))
+                      + WhiteKernel(1e-3, (1e-8, 1e0)))
+            gp = GaussianProcessRegressor(kernel=kernel, normalize_y=True,
+                                          n_restarts_optimizer=self.n_restarts,
+                                          random_state=self.random_state)
+            import warnings
+
+            with warnings.catch_warnings():  # bound warnings on tiny training sets
+                warnings.simplefilter("ignore")
+                gp.fit(S, Y[:, j])
+            self.gps_.append(gp)
+        self.n_params_ = gpr_param_count(S.shape[0], d, Y.shape[1])
+        self.n_inputs_ = d
+        return self
+
+    def predict(self, S, return_var: bool = False):
+        """Mean (n, n_out) and, with ``return_var``, the predictive variance (n, n_out)."""
+        S = np.atleast_2d(np.asarray(S, dtype=float))
+        out = [gp.predict(S, return_std=True) for gp in self.gps_]
+        mean = np.column_stack([m for m, _ in out])
+        if not return_var:
+            return mean
+        return mean, np.column_stack([s**2 for _, s in out])
+
+
+class GMRModel:
+    """GMR on a joint GMM over (s, outputs) (Eq. 18), or one GMM per output (``separate``).
+
+    Parameters
+    ----------
+    n_components : int
+    separate : bool
+        One GMM per output (the paper's "sep. GMR") instead of one joint GMM.
+    random_state : int or None
+    """
+
+    def __init__(self, n_components: int = 3, separate: bool = False, random_state=0) -> None:
+        if int(n_components) < 1:
+            raise ValueError(f"n_components must be at least 1, got {n_components}")
+        self.n_components = int(n_components)
+        self.separate = bool(separate)
+        self.random_state = random_state
+        self.name = "sep_gmr" if separate else "gmr"
+
+    def fit(self, S, Y) -> GMRModel:
+        """Fit by k-means then EM on situations S (M, d_in) and outputs Y (M, n_out)."""
+        from sklearn.mixture import GaussianMixture
+
+        K = self.n_components
+        S, Y = _check_xy(S, Y, K + 1, f"GMR with {K} components")
+        groups = [[j] for j in range(Y.shape[1])] if self.separate else [list(range(Y.shape[1]))]
+        self.gmms_ = []
+        for cols in groups:
+            data = np.column_stack([S, Y[:, cols]])
+            gm = GaussianMixture(K, covariance_type="full", init_params="kmeans",
+                                 reg_covar=1e-6 * max(1.0, float(np.var(data))),
+                                 random_state=self.random_state).fit(data)
+            self.gmms_.append((cols, gm))
+        self.n_inputs_ = S.shape[1]
+        self.n_outputs_ = Y.shape[1]
+        self.n_params_ = sum(gmm_param_count(K, S.shape[1] + len(c)) for c, _ in self.gmms_)
+        return self
+
+    def predict(self, S, return_var: bool = False):
+        """Mean (n, n_out) and, with ``return_var``, the conditional variance (n, n_out)."""
+        S = np.atleast_2d(np.asarray(S, dtype=float))
+        d = self.n_inputs_
+        mean = np.empty((len(S), self.n_outputs_))
+        var = np.empty_like(mean)
+        for cols, gm in self.gmms_:
+            out_idx = np.arange(d, d + len(cols))
+            m, c = gmr_predict(S, gm.weights_, gm.means_, gm.covariances_, np.arange(d),
+                               out_idx, return_cov=True)
+            mean[:, cols] = m
+            var[:, cols] = np.diagonal(c, axis1=1, axis2=2)
+        return (mean, var) if return_var else mean
+
+
+MODELS = {
+    "gpr": lambda **kw: GPRModel(**kw),
+    "gmr": lambda **kw: GMRModel(separate=False, **kw),
+    "sep_gmr": lambda **kw: GMRModel(separate=True, **kw),
+}
+
+
+def make_model(name: str, **kwargs):
+    """A hitting-parameter learner by name: ``"gpr"``, ``"gmr"`` or ``"sep_gmr"``."""
+    if name not in MODELS:
+        raise ValueError(f"unknown hitting-parameter model {name!r}; valid: {', '.join(MODELS)}")
+    return MODELS[name](**kwargs)

@@ -1,0 +1,88 @@
+"""Hitting-parameter learners (Section 5): known functions, variances, Table 1 counts, bad input."""
+
+import numpy as np
+import pytest
+
+from seds_casadi.hitting import (
+    GMRModel,
+    GPRModel,
+    gmm_param_count,
+    gpr_param_count,
+    make_model,
+)
+
+
+def _data(n, seed=0, noise=0.0):
+    """A smooth 2-output map along one input dimension (the hole moved sideways)."""
+    rng = np.random.default_rng(seed)
+    y = np.sort(rng.uniform(-0.5, 0.5, n))
+    S = np.column_stack([np.full(n, 2.4), y])
+    alpha = 0.2 * np.sin(3 * y) + noise * rng.standard_normal(n)
+    kappa = 1.0 + 0.3 * y**2 + noise * rng.standard_normal(n)
+    return S, np.column_stack([alpha, kappa])
+
+
+def _truth(S):
+    y = S[:, 1]
+    return np.column_stack([0.2 * np.sin(3 * y), 1.0 + 0.3 * y**2])
+
+
+@pytest.mark.parametrize("name", ["gpr", "gmr", "sep_gmr"])
+def test_learners_recover_a_known_smooth_function(name):
+    S, Y = _data(25)
+    kw = {} if name == "gpr" else {"n_components": 4}
+    model = make_model(name, **kw).fit(S, Y)
+    St = np.column_stack([np.full(50, 2.4), np.linspace(-0.45, 0.45, 50)])
+    mean, var = model.predict(St, return_var=True)
+    err = np.sqrt(np.mean((mean - _truth(St)) ** 2, axis=0))
+    tol = 0.005 if name == "gpr" else 0.03
+    assert np.all(err < tol), err
+    assert np.all(var >= 0) and mean.shape == var.shape == (50, 2)
+
+
+def test_gpr_is_uncertain_far_from_the_data_and_sure_at_it():
+    S, Y = _data(10)
+    gp = GPRModel().fit(S, Y[:, :1])
+    _, v_at = gp.predict(S, return_var=True)
+    _, v_far = gp.predict(np.array([[2.4, 3.0]]), return_var=True)
+    assert v_far[0, 0] > 10 * v_at.max()
+
+
+def test_joint_gmr_keeps_the_correlation_of_the_outputs():
+    rng = np.random.default_rng(1)
+    s = rng.uniform(-1, 1, 200)
+    a = s + 0.05 * rng.standard_normal(200)
+    k = 2 * a + 0.01 * rng.standard_normal(200)
+    S = np.column_stack([2.4 + 0.01 * rng.standard_normal(200), s])
+    gm = GMRModel(n_components=1).fit(S, np.column_stack([a, k]))
+    _, g = gm.gmms_[0]
+    C = g.covariances_[0]
+    cov = C[2:, 2:] - C[2:, :2] @ np.linalg.solve(C[:2, :2], C[:2, 2:])  # Cov[(a, k) | s]
+    corr = cov[0, 1] / np.sqrt(cov[0, 0] * cov[1, 1])
+    assert corr > 0.9
+
+
+def test_parameter_counts_match_table_1():
+    # rough flat / double hill: s 2-D, angle only; arctan: s 2-D, angle and speed
+    assert gpr_param_count(5, 2, 1) == 19 and gpr_param_count(10, 2, 1) == 34
+    assert gpr_param_count(16, 2, 2) == 72 and gpr_param_count(28, 2, 2) == 120
+    assert gmm_param_count(2, 3) == 20
+    assert 2 * gmm_param_count(3, 3) == 60 and gmm_param_count(3, 4) == 45
+    S, Y = _data(16)
+    assert GPRModel().fit(S, Y).n_params_ == 72
+    assert GMRModel(3).fit(S, Y).n_params_ == 45
+    assert GMRModel(3, separate=True).fit(S, Y).n_params_ == 60
+
+
+def test_bad_input():
+    S, Y = _data(3)
+    with pytest.raises(ValueError, match="at least 4 training points"):
+        GMRModel(3).fit(S, Y)
+    with pytest.raises(ValueError, match="at least 2"):
+        GPRModel().fit(S[:1], Y[:1])
+    with pytest.raises(ValueError, match="NaN"):
+        GPRModel().fit(np.array([[0.0, np.nan], [1.0, 1.0]]), [1.0, 2.0])
+    with pytest.raises(ValueError, match="valid: gpr, gmr, sep_gmr"):
+        make_model("svr")
+    with pytest.raises(ValueError, match="situations"):
+        GPRModel().fit(S, Y[:2])
