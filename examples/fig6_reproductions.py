@@ -10,6 +10,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
 
 from seds_casadi.datasets import load_hitting_demos  # noqa: E402
 from seds_casadi.motion import HittingMotion  # noqa: E402
@@ -31,8 +32,7 @@ for p, v in list(zip(demos.positions, demos.velocities))[:n]:
     swing = r.times <= r.hit_time
     ax3.plot(*p.T, ".", color="tab:red", ms=3)
     ax3.plot(*r.positions[swing].T, "-", color="tab:blue", lw=1)
-    t_demo = dt_demo * (len(p) - 1) - dt_demo * (len(p) - 1 - __import__("numpy").arange(len(p)))
-    t_demo = t_demo - t_demo[-1]  # time to the hit
+    t_demo = dt_demo * (np.arange(len(p)) - (len(p) - 1))  # time to the hit (20 Hz samples)
     t_rep = r.times[swing] - r.hit_time
     for j, ax in enumerate(axes):
         ax.plot(t_demo, v[:, j], ".", color="tab:red", ms=3)
