@@ -80,7 +80,7 @@ def _cmd_fit(a) -> int:
     model.save(path)
     starts = [p[0] for p in demos.positions]
     span = max(float(max(abs(p - demos.target).max() for p in demos.positions)), 1e-9)
-    repro = model.rollout(starts, dt=_guess_dt(demos), tol=1e-3 * span, max_steps=20000)
+    repro = model.rollout(starts, dt=demos.estimated_dt(), tol=1e-3 * span, max_steps=20000)
     fig, ax = _plt().subplots(figsize=(5.5, 5))
     plot_streamlines(model, demos, repro, ax=ax,
                      title=f"SEDS ({a.objective}, K={a.components})")
@@ -89,12 +89,6 @@ def _cmd_fit(a) -> int:
     print(json.dumps(info, indent=1))
     print(f"wrote {path} and {os.path.join(a.out, 'streamlines.png')}")
     return 0
-
-
-def _guess_dt(demos) -> float:
-    from .lasa import _demo_dt
-
-    return demos.dt or _demo_dt(demos)
 
 
 def _cmd_lasa(a) -> int:

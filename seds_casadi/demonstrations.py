@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import os
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 import numpy as np
 from scipy.ndimage import uniform_filter1d
@@ -65,14 +64,6 @@ def _as_demo_list(arrays, what: str) -> list[np.ndarray]:
             )
         out.append(a)
     return out
-
-
-@dataclass(frozen=True)
-class _Processed:
-    positions: list
-    velocities: list
-    target: np.ndarray
-    shifts: list
 
 
 class Demonstrations:
@@ -262,6 +253,22 @@ class Demonstrations:
         phase = np.concatenate([np.linspace(0.0, 1.0, len(p)) for p in self.positions])
         demo = np.concatenate([np.full(len(p), n) for n, p in enumerate(self.positions)])
         return X, Xd, phase, demo
+
+    def estimated_dt(self) -> float:
+        """The time step between samples: ``dt`` if known, else the median of segment length
+        over mean speed (works after :meth:`subsample`, which forgets ``dt``)."""
+        if self.dt:
+            return float(self.dt)
+        dts = []
+        for p, v in zip(self.positions, self.velocities):
+            seg = np.linalg.norm(np.diff(p, axis=0), axis=1)
+            spd = 0.5 * (np.linalg.norm(v[1:], axis=1) + np.linalg.norm(v[:-1], axis=1))
+            ok = spd > 1e-12
+            if ok.any():
+                dts.append(np.median(seg[ok] / spd[ok]))
+        if not dts:
+            raise ValueError("cannot estimate a time step: the demonstrations do not move")
+        return float(np.median(dts))
 
     def subsample(self, n_per_demo: int) -> Demonstrations:
         """A new set with about ``n_per_demo`` evenly spaced samples per demonstration.

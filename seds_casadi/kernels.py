@@ -309,7 +309,6 @@ class SumKernels:
         self.norm = float(norm)
         self.size = layout.size
         self.n_samples = n
-        self.sample_function = g
         self._grad_cache: tuple[bytes, np.ndarray] | None = None
 
     def value(self, theta) -> float:

@@ -97,8 +97,7 @@ def evaluate_shape(shape: str, objective: str = "direction", protocol: str = "al
     X = np.concatenate(test.positions)
     V = np.concatenate(test.velocities)
     F = model.predict(X)
-    # time step of the subsampled demonstrations: path length / mean speed
-    raw_dt = _demo_dt(test)
+    raw_dt = test.estimated_dt()
     starts = np.stack([p[0] for p in test.positions])
     max_len = 20 * max(len(p) for p in test.positions)
     repro = model.rollout(starts, dt=raw_dt, max_steps=max_len, tol=1.0)
@@ -113,18 +112,6 @@ def evaluate_shape(shape: str, objective: str = "direction", protocol: str = "al
     return LasaResult(shape, objective, protocol, velocity_rmse(F, V), direction_error(F, V),
                       float(np.mean(dtw)), seconds, int(model.fit_info["iterations"]),
                       str(model.fit_info["status"]))
-
-
-def _demo_dt(demos) -> float:
-    """Time step of (possibly subsampled) demonstrations from path length over mean speed."""
-    dts = []
-    for p, v in zip(demos.positions, demos.velocities):
-        seg = np.linalg.norm(np.diff(p, axis=0), axis=1)
-        spd = 0.5 * (np.linalg.norm(v[1:], axis=1) + np.linalg.norm(v[:-1], axis=1))
-        ok = spd > 1e-9
-        if ok.any():
-            dts.append(np.median(seg[ok] / spd[ok]))
-    return float(np.median(dts)) if dts else 0.01
 
 
 def _task(args) -> LasaResult:

@@ -101,12 +101,14 @@ class SEDSProblem:
         h = responsibilities(self.X, p["priors"], p["mu"], p["Sx"])
         return _speed_factor(p["A"], h, self.X, self.Xd)
 
-    def to_model_arrays(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def to_model_arrays(self, theta: np.ndarray, speed_factor: float | None = None
+                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Priors, means and joint covariances in the caller's coordinates for a given theta.
 
         Sigma_xdot = A Sigma_x A^T + Q with Q the optimised noise (likelihood) or the
         responsibility-weighted residual covariance of the data (other objectives). For the
-        direction objective the A_k are scaled by :meth:`speed_factor` first.
+        direction objective the A_k are scaled by :meth:`speed_factor` first (pass it as
+        ``speed_factor`` if already computed).
         """
         p = unpack_numpy(np.asarray(theta, dtype=float), self.layout, self.margin)
         K, d = self.layout.K, self.layout.d
@@ -116,7 +118,9 @@ class SEDSProblem:
         else:
             h = responsibilities(self.X, p["priors"], p["mu"], p["Sx"])
             if self.objective == "direction":
-                p["A"] = p["A"] * _speed_factor(p["A"], h, self.X, self.Xd)
+                c = speed_factor if speed_factor is not None else _speed_factor(
+                    p["A"], h, self.X, self.Xd)
+                p["A"] = p["A"] * c
             Q = np.empty((K, d, d))
             for k in range(K):
                 r = self.Xd - self.X @ p["A"][k].T
@@ -417,7 +421,8 @@ class SEDS:
             warnings.warn(f"{msg} (status {status}); the model is certified stable but may fit "
                           "poorly. Raise max_iter or check the data.", ConvergenceWarning,
                           stacklevel=2)
-        priors, means, covs = prob.to_model_arrays(theta)
+        c = prob.speed_factor(theta) if self.objective == "direction" else 1.0
+        priors, means, covs = prob.to_model_arrays(theta, speed_factor=c)
         info = {
             "status": status,
             "success": converged,
@@ -428,7 +433,7 @@ class SEDS:
             "seconds": time.perf_counter() - t0,
             "seconds_solve": time.perf_counter() - t_built,
             "n_parameters": prob.layout.size,
-            "speed_factor": prob.speed_factor(theta) if self.objective == "direction" else 1.0,
+            "speed_factor": c,
             "n_components": self.n_components,
             "n_samples": int(prob.X.shape[0]),
             "hessian": self.hessian,

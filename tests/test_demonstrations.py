@@ -122,3 +122,13 @@ def test_bad_files(tmp_path):
     other.write_text("")
     with pytest.raises(ValueError, match="unknown demonstrations format"):
         load_demonstrations(other)
+
+
+def test_estimated_dt_recovers_the_step_after_subsampling(spiral_demos):
+    assert spiral_demos.estimated_dt() == pytest.approx(0.05, rel=0.02)  # linear_demos' dt
+    # known answer: constant speed along a line, 41 samples at 0.1 s -> 11 kept, 0.4 s apart
+    t = np.linspace(0, 4, 41)[:, None]
+    line = Demonstrations([np.hstack([2 - 0.5 * t, t])], velocities=[np.tile([-0.5, 1.0], (41, 1))])
+    sub = line.subsample(11)
+    assert sub.dt is None
+    assert sub.estimated_dt() == pytest.approx(0.4, rel=1e-9)
