@@ -24,7 +24,15 @@ Model (per unit mass; horizontal position p = (x, y), horizontal velocity u; g =
 * **Impact** (club head to ball, along the club's velocity): v_ball = (1 + e) m_c / (m_c + m_b)
   v_club, with an effective club-head mass m_c = 0.35 kg and restitution e = 0.8 (a putter face).
 
-Integration: semi-implicit Euler with a fixed step (default 2 ms).
+Integration: a fixed step (default 5 ms): velocity by explicit Euler, position by the trapezoid
+rule (exact for a constant deceleration), the hole test on the step's segment so that a fast
+ball cannot jump over it.
+
+Two engines share exactly these equations: ``"numpy"``, the readable reference (also records
+paths), and ``"compiled"``, the same step written in CasADi, looped in C and mapped over shots
+on threads (:class:`BallKernel`), 20-40x faster. Surfaces whose exact evaluation is expensive
+("rough": hundreds of bumps; "heightmap": a spline) are read by the compiled engine from a table
+of derivatives on a 1 cm grid (:meth:`Surface.table`), interpolated linearly.
 """
 
 from __future__ import annotations
@@ -36,7 +44,7 @@ import numpy as np
 from .fields import Field
 
 __all__ = ["BALL_MASS", "BALL_RADIUS", "G", "impact", "capture_speed", "simulate_shots",
-           "ShotResult"]
+           "ShotResult", "BallKernel", "ball_kernel"]
 
 G = 9.81
 BALL_MASS = 0.0459
@@ -95,23 +103,26 @@ class ShotResult:
         return float(np.mean(self.sunk))
 
 
-def _rolling_acc(field: Field, P, U, rolling):
+def _rolling_acc(field: Field, P, U, slide):
     s = field.surface
     grad = s.gradient(P)
     hess = s.hessian(P)
     curv = np.einsum("ni,nij,nj->n", U, hess, U)
     s2 = 1.0 + np.sum(grad * grad, axis=1)
-    gfac = np.where(rolling, 5.0 / 7.0, 1.0) * G
+    # slide: fraction of the step still skidding (0 rolling, 1 skidding; in between at the
+    # transition, so that the speed at the end of that step is exact on flat ground)
+    gfac = (5.0 / 7.0 + (2.0 / 7.0) * slide) * G
     acc = -((gfac + curv) / s2)[:, None] * grad
     vs = np.sqrt(np.sum(U * U, axis=1) + np.sum(grad * U, axis=1) ** 2)
     unit = U / np.maximum(vs, 1e-12)[:, None]
-    resist = np.where(rolling, (5.0 / 7.0) * field.rolling_resistance
-                      * field.surface.friction_factor(P), MU_SLIDE) * G
+    resist = ((1 - slide) * (5.0 / 7.0) * field.rolling_resistance
+              * field.surface.friction_factor(P) + slide * MU_SLIDE) * G
     return acc, unit, resist, grad, s2
 
 
-def simulate_shots(field: Field, ball_xy, launch_velocity, dt: float = 0.002,
-                   max_time: float = 20.0, record_paths: bool = False) -> ShotResult:
+def simulate_shots(field: Field, ball_xy, launch_velocity, dt: float = 0.01,
+                   max_time: float = 20.0, record_paths: bool = False,
+                   engine: str = "auto", hole=None) -> ShotResult:
     """Simulate many shots at once.
 
     Parameters
@@ -126,8 +137,26 @@ def simulate_shots(field: Field, ball_xy, launch_velocity, dt: float = 0.002,
     max_time : float
         Time limit [s]; shots still moving then are neither sunk nor stopped.
     record_paths : bool
-        Keep each ball's path.
+        Keep each ball's path (numpy engine).
+    hole : array, shape (n, 2) or (2,), optional
+        Hole position per shot (default: the field's hole); inside the field's bounds.
+    engine : {"auto", "compiled", "numpy"}
+        "auto" uses the compiled engine for batches of more than a few shots when a C compiler
+        is available (and always when paths are not needed), else numpy.
+
+    Returns
+    -------
+    ShotResult
     """
+    if engine not in ("auto", "compiled", "numpy"):
+        raise ValueError(f"engine must be 'auto', 'compiled' or 'numpy', got {engine!r}")
+    if engine == "compiled" and record_paths:
+        raise ValueError("record_paths needs engine='numpy' (the compiled engine keeps no paths)")
+    if engine == "auto":
+        from .kernels import compiler_available
+
+        engine = ("compiled" if (not record_paths and compiler_available()
+                                 and np.size(ball_xy) > 16) else "numpy")
     P = field.check_situation(ball_xy).copy()
     U = np.atleast_2d(np.asarray(launch_velocity, dtype=float)).copy()
     if U.shape != P.shape:
@@ -139,6 +168,9 @@ def simulate_shots(field: Field, ball_xy, launch_velocity, dt: float = 0.002,
         raise ValueError("launch_velocity contains NaN or infinite values")
     if not (np.isfinite(dt) and dt > 0 and np.isfinite(max_time) and max_time > 0):
         raise ValueError("dt and max_time must be positive")
+    Hh = _holes(field, hole, len(P))
+    if engine == "compiled":
+        return ball_kernel(field, dt).run(P, U, max_time, Hh)
     n = len(P)
     skid_left = np.linalg.norm(U, axis=1) / (3.5 * MU_SLIDE * G)
     active = np.ones(n, bool)
@@ -149,15 +181,16 @@ def simulate_shots(field: Field, ball_xy, launch_velocity, dt: float = 0.002,
     paths = [[p.copy()] for p in P] if record_paths else None
     b = field.bounds
     r = BALL_RADIUS
-    hole, R = field.hole, field.hole_radius
+    R = field.hole_radius
     steps = int(np.ceil(max_time / dt))
     for k in range(steps):
         idx = np.flatnonzero(active)
         if idx.size == 0:
             break
-        p, u = P[idx], U[idx]
+        p, u, hole = P[idx], U[idx], Hh[idx]
         rolling = skid_left[idx] <= 0
-        acc, unit, resist, grad, s2 = _rolling_acc(field, p, u, rolling)
+        slide = np.clip(skid_left[idx] / dt, 0.0, 1.0)
+        acc, unit, resist, grad, s2 = _rolling_acc(field, p, u, slide)
         speed = np.linalg.norm(u, axis=1)
         # a ball at (nearly) rest stays there when resistance can hold it on the slope
         slope_acc = np.linalg.norm(acc, axis=1)
@@ -168,7 +201,11 @@ def simulate_shots(field: Field, ball_xy, launch_velocity, dt: float = 0.002,
         reverse = (np.sum(new_u * u, axis=1) < 0) & (slope_acc <= resist)
         new_u[reverse] = 0.0
         new_u[rest] = 0.0
-        new_p = p + dt * new_u
+        # trapezoid: exact for a constant deceleration; a ball that stops within the step
+        # travels u tau / 2 where tau is its stopping time
+        decel = np.maximum(-np.sum(dv * u, axis=1) / np.maximum(speed, 1e-12), 1e-12) / dt
+        tau = np.minimum(speed / decel, dt)
+        new_p = p + np.where(reverse, 0.5 * tau, 0.5 * dt)[:, None] * (u + new_u)
         skid_left[idx] -= dt
         # hole: closest approach of the step's segment to the hole centre
         seg = new_p - p
@@ -205,3 +242,156 @@ def simulate_shots(field: Field, ball_xy, launch_velocity, dt: float = 0.002,
                 paths[i].append(P[i].copy())
     return ShotResult(sunk, out, stopped, P, t_end,
                       [np.array(q) for q in paths] if record_paths else None)
+
+
+def _holes(field: Field, hole, n: int) -> np.ndarray:
+    if hole is None:
+        return np.tile(field.hole, (n, 1))
+    H = np.atleast_2d(np.asarray(hole, dtype=float))
+    if H.shape == (1, 2):
+        H = np.repeat(H, n, axis=0)
+    if H.shape != (n, 2) or not np.all(np.isfinite(H)):
+        raise ValueError(f"hole must be finite, shape (2,) or ({n}, 2); got {np.shape(hole)}")
+    b, R = field.bounds, field.hole_radius
+    bad = ~((b[0] + R <= H[:, 0]) & (H[:, 0] <= b[1] - R) & (b[2] + R <= H[:, 1])
+            & (H[:, 1] <= b[3] - R))
+    if bad.any():
+        raise ValueError(f"hole at {list(H[np.argmax(bad)])} is outside the field "
+                         f"{list(b)} (keep it one hole radius inside)")
+    return H
+
+
+# ------------------------------------------------------------------ compiled engine
+_KERNELS: dict = {}
+
+
+def ball_kernel(field: Field, dt: float = 0.01) -> BallKernel:
+    """The compiled ball model of ``field`` (built once per field specification and step)."""
+    import json
+
+    key = (json.dumps(field.spec, sort_keys=True, default=str), field.name, float(dt),
+           tuple(field.bounds), field.hole_radius, field.rolling_resistance)
+    k = _KERNELS.get(key)
+    if k is None:
+        k = _KERNELS[key] = BallKernel(field, dt)
+    return k
+
+
+class BallKernel:
+    """The ball model's step in CasADi, looped ``steps_per_call`` times in compiled C and mapped
+    over batches of shots on two threads. Same equations as the numpy engine (module docstring).
+
+    The state of a shot is (x, y, u_x, u_y, skid time left, status, time, hole x, hole y) with
+    status 0 while rolling, 1 sunk, 2 out, 3 stopped; finished shots are frozen. Between calls
+    the finished shots are dropped, so a batch costs what its longest shot needs.
+
+    Parameters
+    ----------
+    field : Field
+    dt : float
+        Step [s].
+    steps_per_call : int
+        Steps per compiled call (0.25 s of play at the default step).
+    batch : int
+        Shots per compiled call.
+    """
+
+    def __init__(self, field: Field, dt: float = 0.01, steps_per_call: int = 25,
+                 batch: int = 128) -> None:
+        import casadi as ca
+
+        from .kernels import compile_functions
+
+        if not (np.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt must be positive, got {dt}")
+        self.field, self.dt = field, float(dt)
+        self.steps_per_call, self.batch = int(steps_per_call), int(batch)
+        step = self._step(ca)
+        s = ca.MX.sym("s", 9)
+        x = s
+        for _ in range(self.steps_per_call):
+            x = step(x)
+        chunk = ca.Function("ball_chunk", [s], [x])
+        mapped = chunk.map(self.batch, "thread", 2)
+        self._fn = compile_functions([mapped])[0]
+        self.compiled = self._fn.class_name() == "External"
+
+    def _step(self, ca):
+        f, dt, r = self.field, self.dt, BALL_RADIUS
+        s = ca.SX.sym("s", 9)
+        p, u, skid, status, t = s[0:2], s[2:4], s[4], s[5], s[6]
+        grad, hess, fr = f.surface.casadi_terms(p, f.bounds)
+        rolling = skid <= 0
+        curv = ca.mtimes([u.T, hess, u])
+        s2 = 1 + ca.dot(grad, grad)
+        slide = ca.fmin(ca.fmax(skid / dt, 0.0), 1.0)
+        acc = -(((5.0 / 7.0 + (2.0 / 7.0) * slide) * G + curv) / s2) * grad
+        vs = ca.sqrt(ca.dot(u, u) + ca.dot(grad, u) ** 2)
+        unit = u / ca.fmax(vs, 1e-12)
+        resist = ((1 - slide) * (5.0 / 7.0) * f.rolling_resistance * fr + slide * MU_SLIDE) * G
+        slope = ca.norm_2(acc)
+        holds = slope <= resist
+        rest = ca.logic_and(ca.logic_and(ca.norm_2(u) < STOP_SPEED, rolling), holds)
+        dv = dt * (acc - resist * unit)
+        nu = u + dv
+        reverse = ca.logic_and(ca.dot(nu, u) < 0, holds)
+        nu = ca.if_else(ca.logic_or(reverse, rest), ca.DM.zeros(2), nu)
+        speed = ca.norm_2(u)
+        decel = ca.fmax(-ca.dot(dv, u) / ca.fmax(speed, 1e-12), 1e-12) / dt
+        tau = ca.fmin(speed / decel, dt)
+        npos = p + ca.if_else(reverse, 0.5 * tau, 0.5 * dt) * (u + nu)
+        seg = npos - p
+        L2 = ca.fmax(ca.dot(seg, seg), 1e-300)
+        hole = s[7:9]
+        lam = ca.fmin(ca.fmax(ca.dot(hole - p, seg) / L2, 0.0), 1.0)
+        off = ca.norm_2(p + lam * seg - hole)
+        R = f.hole_radius
+        cap = 2 * ca.sqrt(ca.fmax(R**2 - off**2, 0.0)) / np.sqrt(2 * r / G)
+        drop = ca.logic_and(off < R, ca.norm_2(nu) < cap)
+        b = f.bounds
+        pos, vel, lost = [], [], 0
+        for j, (lo, hi) in enumerate(((b[0], b[1]), (b[2], b[3]))):
+            low, high = npos[j] < lo + r, npos[j] > hi - r
+            if f.boundary == "walls":
+                pos.append(ca.if_else(low, 2 * (lo + r) - npos[j],
+                                      ca.if_else(high, 2 * (hi - r) - npos[j], npos[j])))
+                vel.append(ca.if_else(ca.logic_or(low, high), -f.wall_restitution * nu[j], nu[j]))
+            else:
+                pos.append(npos[j])
+                vel.append(nu[j])
+                lost = ca.logic_or(lost, ca.logic_or(npos[j] < lo, npos[j] > hi))
+        new_status = ca.if_else(drop, 1, ca.if_else(lost, 2, ca.if_else(rest, 3, 0)))
+        new = ca.vertcat(pos[0], pos[1], vel[0], vel[1], skid - dt, new_status, t + dt, hole)
+        return ca.Function("ball_step", [s], [ca.if_else(status == 0, new, s)])
+
+    def run(self, P: np.ndarray, U: np.ndarray, max_time: float = 20.0,
+            hole: np.ndarray | None = None) -> ShotResult:
+        """Simulate shots from positions P (n, 2) with launch velocities U (n, 2) and holes
+        ``hole`` (n, 2; default the field's). Inputs are not validated here: use
+        :func:`simulate_shots`."""
+        n = len(P)
+        S = np.zeros((9, n))
+        S[7:9] = (np.tile(self.field.hole, (n, 1)) if hole is None else hole).T
+        S[0:2] = P.T
+        S[2:4] = U.T
+        S[4] = np.linalg.norm(U, axis=1) / (3.5 * MU_SLIDE * G)
+        active = np.arange(n)
+        nb = self.batch
+        t_call = self.steps_per_call * self.dt
+        elapsed = 0.0
+        while active.size and elapsed < max_time - 1e-12:
+            m = int(np.ceil(active.size / nb)) * nb
+            X = np.zeros((9, m))
+            X[5] = 1.0  # padding: frozen
+            X[:, :active.size] = S[:, active]
+            out = np.empty_like(X)
+            for c in range(0, m, nb):
+                out[:, c:c + nb] = np.asarray(self._fn(X[:, c:c + nb]))
+            S[:, active] = out[:, :active.size]
+            elapsed += t_call
+            active = active[S[5, active] == 0]
+        # a shot still rolling at the limit, or past it within the last call
+        over = (S[6] > max_time + 1e-9) | (S[5] == 0)
+        status = np.where(over, 0, S[5]).astype(int)
+        return ShotResult(status == 1, status == 2, status == 3, S[0:2].T.copy(),
+                          np.where(over, max_time, S[6]))

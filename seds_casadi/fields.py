@@ -38,6 +38,7 @@ import json
 import os
 from dataclasses import dataclass, field
 
+import casadi as ca
 import numpy as np
 
 __all__ = ["Field", "Surface", "load_field", "field_names", "FIELDS_FOLDER", "stimp_to_rho"]
@@ -233,6 +234,69 @@ class Surface:
         out[:, 1, 1] = sp.ev(P[:, 0], P[:, 1], dy=2)
         out[:, 0, 1] = out[:, 1, 0] = sp.ev(P[:, 0], P[:, 1], dx=1, dy=1)
         return out
+
+    # ---------------------------------------------------------------- symbolic form
+    @property
+    def tabulated(self) -> bool:
+        """Whether :meth:`casadi_terms` reads the derivatives from a table (see :meth:`table`)."""
+        return self.shape in ("rough", "heightmap")
+
+    def table(self, bounds, spacing: float = 0.01) -> tuple[list[np.ndarray], np.ndarray]:
+        """Grid and values of (dH/dx, dH/dy, H_xx, H_xy, H_yy, friction factor) over ``bounds``.
+
+        Used by the compiled ball model for surfaces whose exact evaluation is expensive (many
+        bumps, splines); the values are interpolated linearly between grid points.
+
+        Returns
+        -------
+        grid : [xs, ys]
+        values : array, shape (6 * len(xs) * len(ys),)
+            Flattened in CasADi's interpolant order (channel fastest, then x, then y).
+        """
+        b = np.asarray(bounds, dtype=float)
+        xs = np.linspace(b[0], b[1], max(4, int(np.ceil((b[1] - b[0]) / spacing)) + 1))
+        ys = np.linspace(b[2], b[3], max(4, int(np.ceil((b[3] - b[2]) / spacing)) + 1))
+        X, Y = np.meshgrid(xs, ys, indexing="ij")
+        P = np.column_stack([X.ravel(order="F"), Y.ravel(order="F")])
+        g, h = self.gradient(P), self.hessian(P)
+        vals = np.column_stack([g[:, 0], g[:, 1], h[:, 0, 0], h[:, 0, 1], h[:, 1, 1],
+                                self.friction_factor(P)])
+        return [xs, ys], vals.ravel()
+
+    def casadi_terms(self, p, bounds=None, spacing: float = 0.01):
+        """Gradient (2,), Hessian (2, 2) and friction factor of H at the point ``p`` in CasADi.
+
+        Analytic for "plane", "hills" and "arctan" (the same formulas as :meth:`gradient` and
+        :meth:`hessian`); for tabulated shapes, a linear interpolation of :meth:`table` over
+        ``bounds`` (the table is embedded in the expression as constants).
+        """
+        s, prm = self.shape, self.params
+        if self.tabulated:
+            if bounds is None:
+                raise ValueError(f"a {s!r} surface is tabulated: give the bounds to cover")
+            grid, values = self.table(bounds, spacing)
+            v = ca.interpolant("surface_table", "linear", grid, values)(p)
+            hess = ca.vertcat(ca.horzcat(v[2], v[3]), ca.horzcat(v[3], v[4]))
+            return v[0:2], hess, v[5]
+        hess = ca.SX.zeros(2, 2) if isinstance(p, ca.SX) else ca.MX.zeros(2, 2)
+        if s == "plane":
+            return ca.vertcat(prm["slope_x"], prm["slope_y"]) + 0 * p, hess, 1.0
+        if s == "hills":
+            grad = 0 * p
+            for c, a, w in zip(self._c, self._a, self._w):
+                d = p - c
+                gk = a * ca.exp(-ca.dot(d, d) / (2 * w**2))
+                grad = grad - gk / w**2 * d
+                hess = hess + gk / w**4 * ca.mtimes(d, d.T) - gk / w**2 * ca.DM.eye(2)
+            return grad, hess, 1.0
+        axis = 1 if prm.get("axis", "y") == "y" else 0
+        k = prm["steepness"]
+        z = k * (p[axis] - prm["y0"])
+        du = prm["height"] * k / (1 + z * z) / (np.pi / 2)
+        duu = -prm["height"] * 2 * k * k * z / (1 + z * z) ** 2 / (np.pi / 2)
+        grad = ca.vertcat(0, du) if axis == 1 else ca.vertcat(du, 0)
+        hess[axis, axis] = duu
+        return grad, hess, 1.0
 
     def friction_factor(self, P: np.ndarray) -> np.ndarray:
         """Multiplier of the rolling resistance at P (1 except on fields with variation)."""

@@ -186,12 +186,14 @@ def cache_folder() -> str:
     return root
 
 
-def compile_functions(funcs: list[ca.Function]) -> list[ca.Function]:
+def compile_functions(funcs: list[ca.Function], flags: tuple[str, ...] = ("-O1",)
+                      ) -> list[ca.Function]:
     """Compile CasADi Functions to C (one shared library, cached by source hash) and load them.
 
     Returns the functions unchanged when no compiler is available or compilation fails.
+    ``flags`` are the optimisation flags given to the compiler.
     """
-    return _compile(funcs)
+    return _compile(funcs, tuple(flags))
 
 
 class FastEvaluator:
@@ -227,7 +229,8 @@ class FastEvaluator:
         return self._out[0].copy()
 
 
-def _compile(funcs: list[ca.Function]) -> list[ca.Function]:
+def _compile(funcs: list[ca.Function], opt_flags: tuple[str, ...] = ("-O1",)
+             ) -> list[ca.Function]:
     """Compile functions into one shared library (cached by source hash) and load them."""
     cc = compiler_available()
     if cc is None:
@@ -241,7 +244,7 @@ def _compile(funcs: list[ca.Function]) -> list[ca.Function]:
         src_path = os.path.join(tmpdir, "seds_kernels.c")
         with open(src_path, "rb") as fh:
             src = fh.read()
-        flags = ["-shared", "-fPIC", "-O1"]  # -O2 measured no faster here
+        flags = ["-shared", "-fPIC", *opt_flags]  # -O2 measured no faster for SEDS kernels
         key = hashlib.sha256(src + ca.__version__.encode() + cc.encode()
                              + " ".join(flags).encode()).hexdigest()[:24]
         with _LOCK:

@@ -7,6 +7,7 @@ import pytest
 
 from seds_casadi.ball import (
     BALL_RADIUS,
+    MU_SLIDE,
     G,
     capture_speed,
     impact,
@@ -21,6 +22,12 @@ def _field(surface, rho=0.0, boundary="walls", hole=(2.4, 0.0), **kw):
                 ball_region=[-0.1, 0.3, -2.0, 2.0], rolling_resistance=rho)
     spec.update(kw)
     return Field.from_dict(spec)
+
+
+def _plane(slope_x=0.0, slope_y=0.0, rho=0.0785, boundary="walls"):
+    return _field({"shape": "plane", "slope_x": slope_x, "slope_y": slope_y}, rho=rho,
+                  boundary=boundary, bounds=[-0.3, 3.0, -0.6, 0.6],
+                  ball_region=[-0.1, 0.3, -0.45, 0.45])
 
 
 def test_inclined_plane_rolls_with_five_sevenths_g_sin_theta():
@@ -90,15 +97,16 @@ def test_walls_reflect_and_edges_lose_the_ball():
     assert r.out[0]
 
 
-def test_shots_are_vectorised_and_deterministic():
+@pytest.mark.parametrize("engine", ["numpy", "compiled"])
+def test_shots_are_vectorised_and_deterministic(engine):
     f = load_field("rough_flat")
     rng = np.random.default_rng(0)
     B = np.column_stack([rng.uniform(-0.1, 0.3, 40), rng.uniform(-0.4, 0.4, 40)])
     V = np.column_stack([rng.uniform(1.5, 2.5, 40), rng.uniform(-0.3, 0.3, 40)])
-    a = simulate_shots(f, B, V)
-    b = simulate_shots(f, B, V)
+    a = simulate_shots(f, B, V, engine=engine)
+    b = simulate_shots(f, B, V, engine=engine)
     np.testing.assert_array_equal(a.final_position, b.final_position)
-    one = simulate_shots(f, B[7:8], V[7:8])
+    one = simulate_shots(f, B[7:8], V[7:8], engine=engine)
     np.testing.assert_allclose(one.final_position[0], a.final_position[7])
     assert np.all(a.sunk | a.out | a.stopped)
 
@@ -175,3 +183,71 @@ def test_bad_situations_and_names():
         simulate_shots(f, [[0.0, 0.0]], [[np.nan, 0.0]])
     with pytest.raises(ValueError, match="no field"):
         load_field("moon")
+
+
+def _aimed_shots(f, n, seed):
+    rng = np.random.default_rng(seed)
+    r = f.ball_region
+    B = np.column_stack([rng.uniform(r[0], r[1], n), rng.uniform(r[2], r[3], n)])
+    d = f.hole - B
+    a = np.arctan2(d[:, 1], d[:, 0]) + rng.uniform(-0.12, 0.12, n)
+    s = rng.uniform(0.8, 3.0, n)
+    return B, np.column_stack([s * np.cos(a), s * np.sin(a)])
+
+
+@pytest.mark.parametrize("name", ["flat", "double_hill", "arctan"])
+def test_compiled_engine_equals_the_numpy_reference(name):
+    # same equations, same step: the CasADi kernel must reproduce the numpy reference
+    f = load_field(name)
+    B, V = _aimed_shots(f, 300, 1)
+    ref = simulate_shots(f, B, V, engine="numpy")
+    fast = simulate_shots(f, B, V, engine="compiled")
+    np.testing.assert_array_equal(fast.sunk, ref.sunk)
+    np.testing.assert_array_equal(fast.stopped, ref.stopped)
+    np.testing.assert_allclose(fast.final_position, ref.final_position, atol=1e-9)
+    np.testing.assert_allclose(fast.time, ref.time, atol=1e-9)
+    assert ref.sunk.any() or name == "arctan"
+
+
+def test_compiled_engine_on_edges_and_slopes():
+    f = _plane(slope_x=0.01, slope_y=-0.02, boundary="edges")
+    B, V = _aimed_shots(f, 200, 2)
+    ref = simulate_shots(f, B, V, engine="numpy")
+    fast = simulate_shots(f, B, V, engine="compiled")
+    np.testing.assert_array_equal(fast.out, ref.out)
+    np.testing.assert_array_equal(fast.sunk, ref.sunk)
+    np.testing.assert_allclose(fast.final_position, ref.final_position, atol=1e-9)
+
+
+def test_tabulated_rough_field_is_close_to_the_exact_surface():
+    # rough fields: the compiled engine interpolates a 1 cm table of the derivatives
+    f = load_field("rough_flat")
+    B, V = _aimed_shots(f, 200, 3)
+    ref = simulate_shots(f, B, V, engine="numpy")
+    fast = simulate_shots(f, B, V, engine="compiled")
+    assert np.mean(fast.sunk == ref.sunk) >= 0.95
+    dist = np.linalg.norm(fast.final_position - ref.final_position, axis=1)
+    assert np.median(dist) < 0.01
+
+
+def test_flat_field_is_exact_for_any_step():
+    # constant deceleration, exact skid-to-roll and stopping steps: the stop point does not
+    # depend on the step (v0^2 / (2 mu g) skidding, then rolling from 5/7 v0)
+    f = _plane(rho=0.08)
+    v0 = 1.4
+    t_skid = v0 / (3.5 * MU_SLIDE * G)
+    d_skid = v0 * t_skid - 0.5 * MU_SLIDE * G * t_skid**2
+    v1 = 5 / 7 * v0
+    d_roll = v1**2 / (2 * 5 / 7 * 0.08 * G)
+    for dt in (0.002, 0.01, 0.03):
+        r = simulate_shots(f, [[0.0, 0.0]], [[v0, 0.0]], dt=dt, engine="numpy")
+        assert r.stopped[0]
+        assert r.final_position[0, 0] == pytest.approx(d_skid + d_roll, abs=2e-3)
+
+
+def test_bad_engine_is_refused():
+    f = load_field("flat")
+    with pytest.raises(ValueError, match="engine"):
+        simulate_shots(f, [[0.0, 0.0]], [[1.0, 0.0]], engine="gpu")
+    with pytest.raises(ValueError, match="record_paths"):
+        simulate_shots(f, [[0.0, 0.0]], [[1.0, 0.0]], engine="compiled", record_paths=True)
