@@ -5,7 +5,10 @@ learners, chosen by name with :func:`make_model`:
 
 * ``"gpr"``: one Gaussian process per output, squared-exponential kernel with one length scale
   per input dimension plus a noise term, hyperparameters by maximum likelihood (scikit-learn's
-  GaussianProcessRegressor); mean and variance of Eq. 17.
+  GaussianProcessRegressor); mean and variance of Eq. 17. Length scales are bounded to
+  [0.05, 100] times each input's spread in the training set and the noise to a tenth of the
+  outputs' variance, so that tiny training sets are not explained as pure noise; inputs that
+  do not vary in the training set are left out of the kernel.
 * ``"gmr"``: one joint GMM over (s, alpha, kappa) fitted by k-means then EM, and GMR (Eq. 18)
   with the conditional covariance (the outputs' correlation is kept).
 * ``"sep_gmr"``: one GMM per output over (s, output), predicted independently.
@@ -72,13 +75,19 @@ class GPRModel:
 
         S, Y = _check_xy(S, Y, 2, "GPR")
         d = S.shape[1]
-        scale = np.maximum(np.ptp(S, axis=0), 1e-6)
+        # inputs that do not vary in the training set carry no information (e.g. the distance
+        # to the hole when only its sideways position changes): leave them out of the kernel
+        spread = np.ptp(S, axis=0)
+        self.active_ = np.flatnonzero(spread > 1e-9 * max(1.0, float(spread.max())))
+        if self.active_.size == 0:
+            raise ValueError("GPR: all training situations are the same point")
+        scale = spread[self.active_]
         self.gps_ = []
         for j in range(Y.shape[1]):
-            kernel = (ConstantKernel(1.0, (1e-3, 1e3))
-                      * RBF(length_scale=scale, length_scale_bounds=(1e-3 * scale.min(),
-                                                                     1e3 * scale.max()))
-                      + WhiteKernel(1e-3, (1e-8, 1e0)))
+            kernel = (ConstantKernel(1.0, (1e-2, 1e2))
+                      * RBF(length_scale=scale, length_scale_bounds=(0.05 * scale.min(),
+                                                                     100 * scale.max()))
+                      + WhiteKernel(1e-4, (1e-8, 1e-1)))
             gp = GaussianProcessRegressor(kernel=kernel, normalize_y=True,
                                           n_restarts_optimizer=self.n_restarts,
                                           random_state=self.random_state)
@@ -86,7 +95,7 @@ class GPRModel:
 
             with warnings.catch_warnings():  # bound warnings on tiny training sets
                 warnings.simplefilter("ignore")
-                gp.fit(S, Y[:, j])
+                gp.fit(S[:, self.active_], Y[:, j])
             self.gps_.append(gp)
         self.n_params_ = gpr_param_count(S.shape[0], d, Y.shape[1])
         self.n_inputs_ = d
@@ -94,7 +103,7 @@ class GPRModel:
 
     def predict(self, S, return_var: bool = False):
         """Mean (n, n_out) and, with ``return_var``, the predictive variance (n, n_out)."""
-        S = np.atleast_2d(np.asarray(S, dtype=float))
+        S = np.atleast_2d(np.asarray(S, dtype=float))[:, self.active_]
         out = [gp.predict(S, return_std=True) for gp in self.gps_]
         mean = np.column_stack([m for m, _ in out])
         if not return_var:

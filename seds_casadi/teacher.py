@@ -1,0 +1,405 @@
+"""The teacher: good hitting parameters for a situation, found on the field's ball model.
+
+The paper (Sections 3, 5 and 7.2) trains the hitting-parameter model on examples of good shots
+given by a teacher. Here the teacher searches the ball model of :mod:`seds_casadi.ball`:
+
+* A hit is the learned motion's default hit turned by alpha and scaled by kappa (Eq. 14 at the
+  ball): club-head velocity kappa v* R_alpha psi* (:class:`Stroke`), ball launch velocity by
+  :func:`seds_casadi.ball.impact`.
+* The **situation** s is the hole's position relative to the ball in the field's plane (2-D).
+* A **success map** (Fig. 4a) is success or failure over an (alpha, kappa) grid for one
+  situation. Successful regions that are not connected are different **strategies**; training
+  data must come from one strategy (Fig. 4b), so the teacher keeps one, as the paper did:
+
+  - ``"fixed_speed"`` (flat fields and the double hill): kappa is fixed for every situation
+    (default: the gain whose straight putt would stop :data:`FIXED_SPEED_OVERSHOOT` past the
+    hole on flat ground with the field's rolling resistance); alpha is the middle of the
+    successful interval nearest to the straight line to the hole.
+  - ``"minimal_speed"`` (arctan): the successful region that contains the slowest successful
+    hit; the paper's choice was the slowest hit itself, which sits on the edge of failure (the
+    ball just reaches the hole), so this teacher takes kappa a quarter of the way up that
+    region's speed range, and alpha in the middle of its interval at that speed (a choice the
+    paper leaves open; it makes the examples robust to the ball model's step).
+
+Data sets as in the paper (:func:`paper_situations`): 20 situations along one input dimension
+(the hole moved sideways along the far edge, ball fixed) for the rough flat and double hill
+fields, 56 (a 7 x 8 grid of ball positions) for arctan.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .ball import CLUB_MASS, MU_SLIDE, RESTITUTION, G, impact, simulate_shots
+from .fields import Field, load_field
+
+__all__ = ["Stroke", "Teacher", "HittingDataset", "success_map", "paper_situations",
+           "collect_dataset", "STRATEGIES", "FIXED_SPEED_OVERSHOOT", "default_strategy"]
+
+STRATEGIES = ("fixed_speed", "minimal_speed")
+FIXED_SPEED_OVERSHOOT = 0.6  # m past the hole for the fixed-speed strategy's default gain
+
+
+def default_strategy(field: Field) -> str:
+    """The paper's strategy for a field: minimal speed on arctan, fixed speed elsewhere."""
+    return "minimal_speed" if field.surface.shape == "arctan" else "fixed_speed"
+
+
+@dataclass(frozen=True)
+class Stroke:
+    """The learned motion's default hit: direction psi* and speed v* (Eq. 13).
+
+    Attributes
+    ----------
+    direction : array, shape (3,)
+        psi*, unit; the field's normal is +z.
+    speed : float
+        v* [m/s].
+    club_mass, restitution : float
+        Impact model (see :func:`seds_casadi.ball.impact`).
+    """
+
+    direction: np.ndarray
+    speed: float
+    club_mass: float = CLUB_MASS
+    restitution: float = RESTITUTION
+
+    def __post_init__(self) -> None:
+        d = np.asarray(self.direction, dtype=float).reshape(-1)
+        if d.shape != (3,) or not np.all(np.isfinite(d)) or np.linalg.norm(d[:2]) < 1e-6:
+            raise ValueError("direction must be a finite 3-vector with a horizontal part")
+        if not (np.isfinite(self.speed) and self.speed > 0):
+            raise ValueError(f"speed must be positive, got {self.speed}")
+        object.__setattr__(self, "direction", d / np.linalg.norm(d))
+        object.__setattr__(self, "speed", float(self.speed))
+
+    @classmethod
+    def from_motion(cls, motion) -> Stroke:
+        """The stroke of a fitted :class:`~seds_casadi.motion.HittingMotion`."""
+        return cls(np.asarray(motion.hitting_direction), float(motion.hitting_speed))
+
+    def club_velocity(self, alpha, kappa) -> np.ndarray:
+        """kappa v* R_alpha psi* (Eq. 14 at the ball), shape (n, 3); alpha in radians."""
+        a, k = np.broadcast_arrays(np.asarray(alpha, dtype=float), np.asarray(kappa, dtype=float))
+        a, k = a.ravel(), k.ravel()
+        c, s = np.cos(a), np.sin(a)
+        d = self.direction
+        return (k * self.speed)[:, None] * np.column_stack(
+            [c * d[0] - s * d[1], s * d[0] + c * d[1], np.full_like(a, d[2])])
+
+    def launch_velocity(self, alpha, kappa) -> np.ndarray:
+        """Ball velocity after the impact, shape (n, 2)."""
+        return impact(self.club_velocity(alpha, kappa), self.club_mass, self.restitution)
+
+    def aim(self, s) -> np.ndarray:
+        """The angle alpha (radians) that points the hit straight at the hole, s of shape (n, 2)."""
+        s = np.atleast_2d(s)
+        return np.arctan2(s[:, 1], s[:, 0]) - np.arctan2(self.direction[1], self.direction[0])
+
+    def to_dict(self) -> dict:
+        return {"direction": self.direction.tolist(), "speed": self.speed,
+                "club_mass": self.club_mass, "restitution": self.restitution}
+
+
+def success_map(field: Field, stroke: Stroke, ball, hole, alphas, kappas,
+                engine: str = "auto") -> np.ndarray:
+    """Fig. 4a: whether each (alpha, kappa) of a grid sinks the ball.
+
+    Parameters
+    ----------
+    field : Field
+    stroke : Stroke
+    ball, hole : array, shape (2,)
+    alphas : array, shape (n_alpha,)
+        Hitting angles [rad].
+    kappas : array, shape (n_kappa,)
+        Speed gains.
+
+    Returns
+    -------
+    array of bool, shape (n_kappa, n_alpha)
+    """
+    alphas = np.asarray(alphas, dtype=float).ravel()
+    kappas = np.asarray(kappas, dtype=float).ravel()
+    A, K = np.meshgrid(alphas, kappas)
+    V = stroke.launch_velocity(A.ravel(), K.ravel())
+    res = simulate_shots(field, np.tile(np.asarray(ball, float), (len(V), 1)), V, hole=hole,
+                         engine=engine)
+    return res.sunk.reshape(K.shape)
+
+
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """(start, stop) index pairs of the True runs of a 1-D mask."""
+    m = np.concatenate([[False], mask, [False]]).astype(int)
+    d = np.diff(m)
+    return list(zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1)))
+
+
+def _components(M: np.ndarray) -> np.ndarray:
+    """Labels of the 4-connected components of a boolean grid (0 = background)."""
+    lab = np.zeros(M.shape, int)
+    n = 0
+    for i0, j0 in zip(*np.nonzero(M)):
+        if lab[i0, j0]:
+            continue
+        n += 1
+        stack = [(i0, j0)]
+        lab[i0, j0] = n
+        while stack:
+            i, j = stack.pop()
+            for a, b in ((i + 1, j), (i - 1, j), (i, j + 1), (i, j - 1)):
+                if 0 <= a < M.shape[0] and 0 <= b < M.shape[1] and M[a, b] and not lab[a, b]:
+                    lab[a, b] = n
+                    stack.append((a, b))
+    return lab
+
+
+@dataclass
+class Teacher:
+    """Finds good (alpha, kappa) for situations on a field's ball model (module docstring).
+
+    Parameters
+    ----------
+    field : Field
+    stroke : Stroke
+    strategy : {"fixed_speed", "minimal_speed"} or None
+        None: the paper's choice for the field (:func:`default_strategy`).
+    kappa : float or None
+        The fixed speed gain (``"fixed_speed"``); None: a straight putt that would stop
+        :data:`FIXED_SPEED_OVERSHOOT` past the field's hole on flat ground.
+    alpha_range : (float, float)
+        Angles searched [deg].
+    kappa_range : (float, float)
+        Speed gains searched (``"minimal_speed"``).
+    resolution : (int, int)
+        Grid of the search (angles, gains); the angle is refined around the choice.
+    """
+
+    field: Field
+    stroke: Stroke
+    strategy: str | None = None
+    kappa: float | None = None
+    alpha_range: tuple = (-40.0, 40.0)
+    kappa_range: tuple = (0.5, 3.0)
+    resolution: tuple = (161, 51)
+    engine: str = "auto"
+    _fixed: float = field(init=False, default=0.0, repr=False)
+
+    def __post_init__(self) -> None:
+        if self.strategy is None:
+            self.strategy = default_strategy(self.field)
+        if self.strategy not in STRATEGIES:
+            raise ValueError(f"unknown strategy {self.strategy!r}; valid: {', '.join(STRATEGIES)}")
+        lo, hi = self.alpha_range
+        if not lo < hi:
+            raise ValueError(f"alpha_range must be (low, high) with low < high, got "
+                             f"{self.alpha_range}")
+        if not 0 < self.kappa_range[0] < self.kappa_range[1]:
+            raise ValueError(f"kappa_range must be (low, high), 0 < low < high, got "
+                             f"{self.kappa_range}")
+        if self.kappa is not None and not (np.isfinite(self.kappa) and self.kappa > 0):
+            raise ValueError(f"kappa must be positive, got {self.kappa}")
+        self._fixed = float(self.kappa) if self.kappa is not None else self._default_kappa()
+
+    def _default_kappa(self) -> float:
+        f = self.field
+        dist = np.linalg.norm(f.hole - _centre(f.ball_region)) + FIXED_SPEED_OVERSHOOT
+        a_roll = 5 / 7 * f.rolling_resistance * G
+        # launch v0 skids to 5/7 v0 over d_s = 24/98 v0^2/(mu g) (see ball), then rolls
+        # (5/7 v0)^2 / (2 a_roll): solve d_s + d_r = dist for v0
+        c = 24 / 98 / (MU_SLIDE * G) + (5 / 7) ** 2 / (2 * max(a_roll, 1e-9))
+        v0 = np.sqrt(dist / c)
+        club = np.linalg.norm(self.stroke.launch_velocity(0.0, 1.0)[0])
+        return float(v0 / club)
+
+    @property
+    def fixed_kappa(self) -> float:
+        """The fixed speed gain of the ``"fixed_speed"`` strategy."""
+        return self._fixed
+
+    def good_shot(self, ball, hole) -> tuple[float, float]:
+        """(alpha [rad], kappa) that sinks the ball from ``ball`` into ``hole`` by this
+        teacher's strategy, or (nan, nan) when the strategy has no successful hit there."""
+        ball = np.asarray(ball, float)
+        hole = np.asarray(hole, float)
+        n_a, n_k = self.resolution
+        alphas = np.deg2rad(np.linspace(*self.alpha_range, n_a))
+        aim = float(self.stroke.aim(hole - ball)[0])
+        if self.strategy == "fixed_speed":
+            row = success_map(self.field, self.stroke, ball, hole, alphas, [self._fixed],
+                              self.engine)[0]
+            runs = _runs(row)
+            if not runs:
+                return np.nan, np.nan
+            mids = [0.5 * (alphas[a] + alphas[b - 1]) for a, b in runs]
+            a0, b0 = runs[int(np.argmin([abs(m - aim) for m in mids]))]
+            return self._refine(ball, hole, alphas, a0, b0, self._fixed), self._fixed
+        kappas = np.linspace(*self.kappa_range, n_k)
+        M = success_map(self.field, self.stroke, ball, hole, alphas, kappas, self.engine)
+        if not M.any():
+            return np.nan, np.nan
+        lab = _components(M)
+        first = int(np.nonzero(M.any(axis=1))[0][0])
+        # the slowest successful hits (nearest the straight aim among them) pick the region
+        cols = np.flatnonzero(M[first])
+        comp = lab[first, cols[np.argmin(np.abs(alphas[cols] - aim))]]
+        rows = np.flatnonzero((lab == comp).any(axis=1))
+        i = rows[0] + int(round(0.25 * (rows[-1] - rows[0])))
+        kappa = float(kappas[i])
+        runs = _runs(lab[i] == comp)
+        a0, b0 = max(runs, key=lambda r: r[1] - r[0])
+        return self._refine(ball, hole, alphas, a0, b0, kappa), kappa
+
+    def _refine(self, ball, hole, alphas, a0, b0, kappa) -> float:
+        """Middle of a successful angle interval, its edges found on a 10x finer grid."""
+        step = alphas[1] - alphas[0]
+        lo = np.linspace(alphas[a0] - step, alphas[a0], 11)
+        hi = np.linspace(alphas[b0 - 1], alphas[b0 - 1] + step, 11)
+        ok = success_map(self.field, self.stroke, ball, hole, np.concatenate([lo, hi]), [kappa],
+                         self.engine)[0]
+        left = lo[np.argmax(ok[:11])] if ok[:11].any() else alphas[a0]
+        right = hi[10 - np.argmax(ok[11:][::-1])] if ok[11:].any() else alphas[b0 - 1]
+        return float(0.5 * (left + right))
+
+    def collect(self, balls, holes, progress: bool = False) -> HittingDataset:
+        """Good shots for many situations; situations without one are dropped (reported in
+        the data set's ``dropped``)."""
+        balls = np.atleast_2d(np.asarray(balls, float))
+        holes = np.atleast_2d(np.asarray(holes, float))
+        if balls.shape != holes.shape or balls.shape[1] != 2:
+            raise ValueError(f"balls and holes must both have shape (n, 2), got {balls.shape} "
+                             f"and {holes.shape}")
+        self.field.check_situation(balls)
+        out = np.full((len(balls), 2), np.nan)
+        it = range(len(balls))
+        if progress:
+            from tqdm.auto import tqdm
+
+            it = tqdm(it, desc=f"teacher on {self.field.name}", leave=False)
+        for i in it:
+            out[i] = self.good_shot(balls[i], holes[i])
+        ok = np.isfinite(out[:, 0])
+        return HittingDataset(self.field.name, self.strategy, balls[ok], holes[ok],
+                              out[ok, 0], out[ok, 1], self.stroke,
+                              dropped=int((~ok).sum()))
+
+
+def _centre(region) -> np.ndarray:
+    return np.array([(region[0] + region[1]) / 2, (region[2] + region[3]) / 2])
+
+
+def paper_situations(field: Field, layout: str | None = None, n: int | None = None):
+    """The paper's situations for a field: balls and holes, each shape (n, 2).
+
+    ``layout="line"`` (default except on arctan): the ball at the centre of the ball region,
+    the hole moved sideways along the far edge (the field's hole x, y across the field),
+    ``n`` = 20. ``layout="grid"`` (arctan): the hole at its place, the ball on a 7 x 8 grid over
+    the ball region, ``n`` = 56 (or the nearest grid to ``n``).
+    """
+    if layout is None:
+        layout = "grid" if field.surface.shape == "arctan" else "line"
+    b, R = field.bounds, field.hole_radius
+    if layout == "line":
+        n = 20 if n is None else int(n)
+        margin = 0.15 * (b[3] - b[2])
+        ys = np.linspace(b[2] + margin, b[3] - margin, n)
+        holes = np.column_stack([np.full(n, field.hole[0]), ys])
+        balls = np.tile(_centre(field.ball_region), (n, 1))
+        assert np.all(np.abs(ys) <= b[3] - R)
+        return balls, holes
+    if layout == "grid":
+        n = 56 if n is None else int(n)
+        nx = max(2, int(round(np.sqrt(n * 7 / 8))))
+        ny = max(2, int(round(n / nx)))
+        r = field.ball_region
+        X, Y = np.meshgrid(np.linspace(r[0], r[1], nx), np.linspace(r[2], r[3], ny),
+                           indexing="ij")
+        balls = np.column_stack([X.ravel(), Y.ravel()])
+        return balls, np.tile(field.hole, (len(balls), 1))
+    raise ValueError(f"layout must be 'line' or 'grid', got {layout!r}")
+
+
+@dataclass
+class HittingDataset:
+    """Good shots for a field: situations and the teacher's (alpha, kappa).
+
+    Attributes
+    ----------
+    field : str
+    strategy : str
+    ball, hole : array, shape (n, 2)
+    alpha : array, shape (n,)
+        Hitting angles [rad].
+    kappa : array, shape (n,)
+    stroke : Stroke
+    dropped : int
+        Situations where the strategy found no successful hit.
+    """
+
+    field: str
+    strategy: str
+    ball: np.ndarray
+    hole: np.ndarray
+    alpha: np.ndarray
+    kappa: np.ndarray
+    stroke: Stroke
+    dropped: int = 0
+
+    def __len__(self) -> int:
+        return len(self.alpha)
+
+    @property
+    def situations(self) -> np.ndarray:
+        """s = hole - ball, shape (n, 2)."""
+        return self.hole - self.ball
+
+    @property
+    def outputs(self) -> np.ndarray:
+        """What the learners predict: alpha [deg] for fixed speed, (alpha [deg], kappa) else."""
+        a = np.rad2deg(self.alpha)
+        return a[:, None] if self.strategy == "fixed_speed" else np.column_stack([a, self.kappa])
+
+    def save(self, path: str | os.PathLike) -> None:
+        """Write an ``.npz`` file (atomic; no pickle)."""
+        path = os.fspath(path)
+        folder = os.path.dirname(os.path.abspath(path))
+        fd, tmp = tempfile.mkstemp(suffix=".npz", dir=folder)
+        os.close(fd)
+        try:
+            np.savez(tmp, ball=self.ball, hole=self.hole, alpha=self.alpha, kappa=self.kappa,
+                     meta=np.array(json.dumps({"field": self.field, "strategy": self.strategy,
+                                               "dropped": self.dropped,
+                                               "stroke": self.stroke.to_dict()})))
+            os.replace(tmp, path)
+        finally:
+            if os.path.exists(tmp):
+                os.remove(tmp)
+
+    @classmethod
+    def load(cls, path: str | os.PathLike) -> HittingDataset:
+        """Read a file written by :meth:`save`."""
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                meta = json.loads(str(z["meta"]))
+                st = meta["stroke"]
+                return cls(meta["field"], meta["strategy"], z["ball"], z["hole"], z["alpha"],
+                           z["kappa"], Stroke(np.array(st["direction"]), st["speed"],
+                                              st["club_mass"], st["restitution"]),
+                           int(meta["dropped"]))
+        except (OSError, KeyError, ValueError) as exc:
+            raise ValueError(f"{path}: not a hitting data set ({exc})") from None
+
+
+def collect_dataset(field: Field | str, stroke: Stroke, layout: str | None = None,
+                    n: int | None = None, strategy: str | None = None,
+                    progress: bool = False, **teacher_kwargs) -> HittingDataset:
+    """The paper's data set for a field (:func:`paper_situations`) taught by :class:`Teacher`."""
+    f = load_field(field) if not isinstance(field, Field) else field
+    balls, holes = paper_situations(f, layout, n)
+    return Teacher(f, stroke, strategy, **teacher_kwargs).collect(balls, holes, progress)
+
