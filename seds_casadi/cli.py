@@ -4,6 +4,7 @@ Commands
 --------
 fit     fit a stable DS to demonstrations in a .npz/.csv file; write the model and a figure
 lasa    run the LASA handwriting benchmark; write lasa.csv, summary.txt and figures
+table1  the paper's Table 1 (GPR vs GMR for the hitting parameters); write table1.csv, figures
 """
 
 from __future__ import annotations
@@ -62,6 +63,28 @@ def build_parser() -> argparse.ArgumentParser:
                     help="a fast check: Angle, CShape and GShape, direction objective, "
                          "protocol all")
     la.add_argument("--out", default="lasa_out", help="output folder [lasa_out]")
+    la.add_argument("--dask", default=None, metavar="ADDRESS",
+                    help="run on a Dask scheduler (tcp://host:8786) instead of local workers")
+
+    from .table1 import TABLE1_FIELDS
+
+    t = sub.add_parser("table1", help="reproduce the paper's Table 1 on the simulated fields",
+                       description="Learn the hitting motion, let the teacher collect good "
+                                   "shots on each field, and compare GPR and GMR for the "
+                                   "hitting parameters as in the paper's Table 1.")
+    t.add_argument("--field", nargs="+", default=list(TABLE1_FIELDS), metavar="FIELD",
+                   help="field names or .json field files [rough_flat double_hill arctan]")
+    t.add_argument("--repetitions", type=int, default=100, help="repetitions [100]")
+    t.add_argument("--seed", type=int, default=0, help="random seed [0]")
+    t.add_argument("--workers", type=int, default=1, help="local worker processes [1]")
+    t.add_argument("--dask", default=None, metavar="ADDRESS",
+                   help="run the repetitions on a Dask scheduler (tcp://host:8786)")
+    t.add_argument("--demos", default=None,
+                   help="demonstrations of the hitting motion (.npz/.csv) [shipped putts]")
+    t.add_argument("--no-figures", action="store_true", help="skip Fig. 10 and 11")
+    t.add_argument("--quick", action="store_true",
+                   help="3 repetitions and a coarser teacher: a check in about a minute")
+    t.add_argument("--out", default="table1_out", help="output folder [table1_out]")
     return p
 
 
@@ -100,9 +123,18 @@ def _cmd_lasa(a) -> int:
         objectives, protocols = ["direction"], ["all"]
     results = run_lasa(shapes=shapes, objectives=objectives, protocols=protocols,
                        n_components=a.components, n_samples=a.samples, random_state=a.seed,
-                       out_dir=a.out, figures=not a.no_figures, workers=a.workers)
+                       out_dir=a.out, figures=not a.no_figures, workers=a.workers,
+                       dask=a.dask)
     print(summary_table(results))
     print(f"wrote {os.path.join(a.out, 'lasa.csv')} and {os.path.join(a.out, 'summary.txt')}")
+    return 0
+
+
+def _cmd_table1(a) -> int:
+    from .table1 import table1_command
+
+    table1_command(a.field, a.repetitions, a.seed, a.out, a.workers, a.dask, a.quick, a.demos,
+                   not a.no_figures, progress=sys.stderr.isatty())
     return 0
 
 
@@ -121,6 +153,8 @@ def main(argv: list[str] | None = None) -> int:
             return _cmd_fit(a)
         if a.command == "lasa":
             return _cmd_lasa(a)
+        if a.command == "table1":
+            return _cmd_table1(a)
     except (ValueError, TypeError, FileNotFoundError, SEDSError) as exc:
         print(f"seds-casadi {a.command}: error: {exc}", file=sys.stderr)
         return 2

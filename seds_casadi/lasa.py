@@ -14,17 +14,15 @@ time and IPOPT's iterations. Units are LASA's: mm and mm/s.
 
 from __future__ import annotations
 
-import csv
-import multiprocessing
 import os
-import tempfile
 import time
 import warnings
-from concurrent.futures import Executor, ProcessPoolExecutor
+from concurrent.futures import Executor
 from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from ._io import atomic_csv, atomic_text
 from .datasets import LASA_SHAPES, load_lasa
 from .errors import ConvergenceWarning
 from .metrics import direction_error, dtw_distance, velocity_rmse
@@ -121,7 +119,7 @@ def _task(args) -> LasaResult:
 def run_lasa(shapes=None, objectives=("direction",), protocols=PROTOCOLS, n_components: int = 5,
              n_samples: int = 100, random_state: int = 0, out_dir: str | None = None,
              figures: bool = True, workers: int = 1, executor: Executor | None = None,
-             progress: bool = True) -> list[LasaResult]:
+             progress: bool = True, dask: str | None = None) -> list[LasaResult]:
     """Run the LASA benchmark over shapes x objectives x protocols.
 
     Parameters
@@ -138,6 +136,10 @@ def run_lasa(shapes=None, objectives=("direction",), protocols=PROTOCOLS, n_comp
     executor : concurrent.futures.Executor, optional
         Any executor (e.g. a Dask ``distributed.Client().get_executor()``).
     progress : bool
+        Show a progress bar.
+    dask : str, optional
+        Address of a Dask scheduler to run the fits on (see
+        :func:`seds_casadi.executors.open_executor`).
         Show a progress bar.
 
     Returns
@@ -170,49 +172,30 @@ def run_lasa(shapes=None, objectives=("direction",), protocols=PROTOCOLS, n_comp
 
     bar = tqdm(total=len(tasks), desc="LASA fits", unit="fit", disable=not progress)
     results: list[LasaResult] = []
+    from .executors import open_executor
+
     try:
-        if executor is None and int(workers) == 1:
-            for t in tasks:
-                results.append(_task(t))
+        if executor is not None:
+            for r in executor.map(_task, tasks):
+                results.append(r)
                 bar.update(1)
         else:
-            own = executor is None
-            # spawn, not fork: a forked child of a process that has loaded CasADi can deadlock
-            ex = executor or ProcessPoolExecutor(max_workers=int(workers),
-                                                 mp_context=multiprocessing.get_context("spawn"))
-            try:
+            with open_executor(workers, dask) as ex:
                 for r in ex.map(_task, tasks):
                     results.append(r)
                     bar.update(1)
-            finally:
-                if own:
-                    ex.shutdown()
     finally:
         bar.close()
     if out_dir is not None:
         write_csv(results, os.path.join(out_dir, "lasa.csv"))
-        _atomic_text(os.path.join(out_dir, "summary.txt"), summary_table(results))
+        atomic_text(os.path.join(out_dir, "summary.txt"), summary_table(results))
     return results
 
 
 def write_csv(results: list[LasaResult], path: str) -> None:
     """Write results with the columns ``shape, objective, protocol, rmse, e_dot, dtwd, seconds,
     iterations`` (atomically: a partial file is never left under the final name)."""
-    folder = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(prefix=".lasa-", suffix=".csv", dir=folder)
-    try:
-        with os.fdopen(fd, "w", newline="", encoding="utf-8") as fh:
-            w = csv.writer(fh)
-            w.writerow(CSV_COLUMNS)
-            for r in results:
-                row = asdict(r)
-                w.writerow([row[c] if not isinstance(row[c], float) else f"{row[c]:.6g}"
-                            for c in CSV_COLUMNS])
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    atomic_csv(path, CSV_COLUMNS, ([asdict(r)[c] for c in CSV_COLUMNS] for r in results))
 
 
 def summary_table(results: list[LasaResult]) -> str:
@@ -230,11 +213,3 @@ def summary_table(results: list[LasaResult]) -> str:
             f"{np.mean([r.iterations for r in rs]):>9.1f} "
             f"{sum(r.status not in _CONVERGED for r in rs):>11d}")
     return "\n".join(lines) + "\n"
-
-
-def _atomic_text(path: str, text: str) -> None:
-    folder = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(prefix=".txt-", dir=folder)
-    with os.fdopen(fd, "w", encoding="utf-8") as fh:
-        fh.write(text)
-    os.replace(tmp, path)

@@ -1,4 +1,5 @@
-"""Figures: streamlines of a learned DS with demonstrations and reproductions.
+"""Figures: streamlines of a learned DS, success maps (Fig. 4a), hitting-parameter models
+(Fig. 10 and 11) and fields with ball paths.
 
 Matplotlib is imported lazily with the non-interactive Agg backend when no display is set, so
 figures can be written on headless machines and in CI.
@@ -10,7 +11,8 @@ import os
 
 import numpy as np
 
-__all__ = ["plot_streamlines", "save_figure"]
+__all__ = ["plot_streamlines", "save_figure", "plot_success_map", "plot_regression_1d",
+           "plot_joint_gmm", "plot_field"]
 
 
 def _plt():
@@ -97,3 +99,161 @@ def save_figure(fig, path: str | os.PathLike, dpi: int = 110) -> None:
         if os.path.exists(tmp):
             os.unlink(tmp)
         plt.close(fig)
+
+
+def plot_success_map(success: np.ndarray, alphas, kappas, ax=None, title=None, chosen=None):
+    """Fig. 4a: success (green) or failure (red) over the (alpha, kappa) grid.
+
+    Parameters
+    ----------
+    success : array of bool, shape (n_kappa, n_alpha)
+    alphas : array, shape (n_alpha,)
+        Hitting angles [rad].
+    kappas : array, shape (n_kappa,)
+    chosen : (alpha, kappa), optional
+        The teacher's choice, marked with a cross.
+    """
+    plt = _plt()
+    from matplotlib.colors import ListedColormap
+
+    if ax is None:
+        _, ax = plt.subplots(figsize=(5, 4))
+    a = np.rad2deg(np.asarray(alphas))
+    ax.pcolormesh(a, kappas, np.asarray(success, float), shading="nearest",
+                  cmap=ListedColormap(["#d9534f", "#5cb85c"]), vmin=0, vmax=1)
+    if chosen is not None:
+        ax.plot(np.rad2deg(chosen[0]), chosen[1], "kx", ms=10, mew=2, label="teacher")
+        ax.legend(loc="upper right", fontsize=8)
+    ax.set_xlabel("hitting angle alpha [deg]")
+    ax.set_ylabel("speed gain kappa")
+    if title:
+        ax.set_title(title, fontsize=9)
+    return ax
+
+
+def plot_regression_1d(x, y, train, models: dict, ax_row=None, xlabel="s_y [m]",
+                       ylabel="alpha [deg]", x_query=None, column: int = 1):
+    """Fig. 10: each model's mean and 2-sigma band over one input, with the data set.
+
+    Parameters
+    ----------
+    x : array, shape (n, d_in)
+        Situations of the data set (the ``column`` varies).
+    y : array, shape (n,)
+        Output to show (first output of the models).
+    train : array of int
+        Indices used for training (black crosses; the others red).
+    models : dict
+        Title -> fitted model with ``predict(S, return_var=True)``.
+    """
+    plt = _plt()
+    if ax_row is None:
+        _, ax_row = plt.subplots(1, len(models), figsize=(5 * len(models), 3.6), sharey=True)
+    ax_row = np.atleast_1d(ax_row)
+    x = np.atleast_2d(x)
+    xs = x[:, column]
+    if x_query is None:
+        span = np.ptp(xs)
+        x_query = np.linspace(xs.min() - 0.3 * span, xs.max() + 0.3 * span, 300)
+    Q = np.tile(x[0], (len(x_query), 1))
+    Q[:, column] = x_query
+    test = np.setdiff1d(np.arange(len(xs)), train)
+    for ax, (title, m) in zip(ax_row, models.items()):
+        mean, var = m.predict(Q, return_var=True)
+        sd = np.sqrt(np.maximum(var[:, 0], 0))
+        ax.fill_between(x_query, mean[:, 0] - 2 * sd, mean[:, 0] + 2 * sd, color="0.8",
+                        label="2 sigma")
+        ax.plot(x_query, mean[:, 0], "b-", lw=1.5, label="mean")
+        ax.plot(xs[test], y[test], "r+", ms=8, mew=1.5, label="data")
+        ax.plot(xs[train], y[train], "k+", ms=8, mew=1.5, label="training")
+        ax.set_title(title, fontsize=9)
+        ax.set_xlabel(xlabel)
+    ax_row[0].set_ylabel(ylabel)
+    ax_row[0].legend(fontsize=7, loc="best")
+    return ax_row
+
+
+def plot_joint_gmm(model, outputs: np.ndarray, ax_row=None, names=("alpha [deg]", "kappa")):
+    """Fig. 11: the joint GMM's two outputs with each Gaussian, and each Gaussian's absolute
+    correlation matrix.
+
+    Parameters
+    ----------
+    model : GMRModel
+        Fitted with ``separate=False`` on 2-D situations and 2 outputs.
+    outputs : array, shape (n, 2)
+        The data set's outputs.
+    """
+    plt = _plt()
+    (_, gm), = model.gmms_
+    K = gm.n_components
+    if ax_row is None:
+        fig = plt.figure(figsize=(4 + 2.2 * K, 3.8))
+        ax_row = [fig.add_subplot(1, K + 1, 1)] + [fig.add_subplot(1, K + 1, k + 2)
+                                                  for k in range(K)]
+    ax = ax_row[0]
+    d = model.n_inputs_
+    ax.plot(outputs[:, 0], outputs[:, 1], "k.", ms=4)
+    t = np.linspace(0, 2 * np.pi, 100)
+    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    for k in range(K):
+        mu = gm.means_[k, d:d + 2]
+        C = gm.covariances_[k][d:d + 2, d:d + 2]
+        w, V = np.linalg.eigh(C)
+        ell = (V * 2 * np.sqrt(np.maximum(w, 0))) @ np.vstack([np.cos(t), np.sin(t)])
+        ax.plot(mu[0] + ell[0], mu[1] + ell[1], color=colors[k % len(colors)], lw=1.5)
+        ax.plot(*mu, "o", color=colors[k % len(colors)])
+    ax.set_xlabel(names[0])
+    ax.set_ylabel(names[1])
+    ax.set_title("outputs and Gaussians (2 sigma)", fontsize=9)
+    labels = ["s_x", "s_y", names[0].split()[0], names[1].split()[0]][-gm.means_.shape[1]:]
+    for k in range(K):
+        C = gm.covariances_[k]
+        s = np.sqrt(np.diag(C))
+        R = np.abs(C / np.outer(s, s))
+        a = ax_row[k + 1]
+        a.imshow(R, vmin=0, vmax=1, cmap="Greys")
+        for i in range(len(R)):
+            for j in range(len(R)):
+                a.text(j, i, f"{R[i, j]:.2f}", ha="center", va="center", fontsize=7,
+                       color="w" if R[i, j] > 0.5 else "k")
+        a.set_xticks(range(len(R)), labels, fontsize=7)
+        a.set_yticks(range(len(R)), labels, fontsize=7)
+        a.set_title(f"|corr|, Gaussian {k + 1}", fontsize=9, color=colors[k % len(colors)])
+    return ax_row
+
+
+def plot_field(field, ax=None, paths=None, sunk=None, ball=None, hole=None, n: int = 200):
+    """The field's height map with ball paths (green: sunk, red: missed).
+
+    Parameters
+    ----------
+    field : Field
+    paths : list of array (T, 2), optional
+    sunk : array of bool, optional
+    ball, hole : array, shape (2,) or (n, 2), optional
+    """
+    plt = _plt()
+    if ax is None:
+        _, ax = plt.subplots(figsize=(8, 3.4))
+    b = field.bounds
+    X, Y = np.meshgrid(np.linspace(b[0], b[1], n), np.linspace(b[2], b[3], max(20, n // 3)))
+    Z = field.surface.height(np.column_stack([X.ravel(), Y.ravel()])).reshape(X.shape)
+    im = ax.contourf(X, Y, Z * 100, levels=20, cmap="terrain")
+    plt.colorbar(im, ax=ax, label="height [cm]", shrink=0.8)
+    holes = np.atleast_2d(field.hole if hole is None else hole)
+    for h in holes:
+        ax.add_patch(plt.Circle(h, field.hole_radius, color="k", fill=False, lw=1.2))
+    for i, p in enumerate(paths or []):
+        ok = bool(sunk[i]) if sunk is not None else True
+        ax.plot(p[:, 0], p[:, 1], "-", color="g" if ok else "r", lw=0.9, alpha=0.8)
+    if ball is not None:
+        B = np.atleast_2d(ball)
+        ax.plot(B[:, 0], B[:, 1], "wo", mec="k", ms=4)
+    ax.set_aspect("equal")
+    ax.set_xlim(b[0], b[1])
+    ax.set_ylim(b[2], b[3])
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_title(field.name, fontsize=9)
+    return ax

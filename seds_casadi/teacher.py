@@ -185,8 +185,8 @@ class Teacher:
     strategy: str | None = None
     kappa: float | None = None
     alpha_range: tuple = (-40.0, 40.0)
-    kappa_range: tuple = (0.5, 3.0)
-    resolution: tuple = (161, 51)
+    kappa_range: tuple = (0.8, 2.4)
+    resolution: tuple = (161, 65)
     engine: str = "auto"
     _fixed: float = field(init=False, default=0.0, repr=False)
 

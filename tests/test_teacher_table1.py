@@ -1,0 +1,229 @@
+"""Teacher, success maps, Table 1 protocol (inline, local processes, Dask LocalCluster), CLI."""
+
+import csv
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from seds_casadi.ball import simulate_shots
+from seds_casadi.executors import InlineExecutor, open_executor
+from seds_casadi.fields import load_field
+from seds_casadi.table1 import (
+    CSV_COLUMNS,
+    format_table1,
+    run_table1,
+    training_indices,
+    write_table1_csv,
+)
+from seds_casadi.teacher import (
+    HittingDataset,
+    Stroke,
+    Teacher,
+    collect_dataset,
+    paper_situations,
+    success_map,
+)
+
+STROKE = Stroke(np.array([0.995, 0.097, -0.003]), 0.99)
+COARSE = {"resolution": (81, 26)}
+
+
+@pytest.fixture(scope="module")
+def datasets():
+    out = {}
+    for name in ("double_hill", "arctan"):
+        f = load_field(name)
+        out[name] = (f, collect_dataset(f, STROKE, **COARSE))
+    return out
+
+
+def test_stroke_is_eq14_at_the_ball():
+    v = STROKE.club_velocity(np.deg2rad(30.0), 1.5)[0]
+    # rotating about +z keeps the vertical part and the length; the angle grows by 30 deg
+    assert np.linalg.norm(v) == pytest.approx(1.5 * 0.99)
+    a0 = np.arctan2(STROKE.direction[1], STROKE.direction[0])
+    assert np.arctan2(v[1], v[0]) == pytest.approx(a0 + np.deg2rad(30.0))
+    assert v[2] == pytest.approx(1.5 * 0.99 * STROKE.direction[2])
+    # aim() points the hit at the hole
+    s = np.array([[2.0, 0.5]])
+    u = STROKE.club_velocity(STROKE.aim(s), 1.0)[0, :2]
+    assert u[0] * s[0, 1] - u[1] * s[0, 0] == pytest.approx(0.0, abs=1e-12) and u @ s[0] > 0
+    with pytest.raises(ValueError, match="speed"):
+        Stroke(np.array([1.0, 0, 0]), -1.0)
+    with pytest.raises(ValueError, match="horizontal"):
+        Stroke(np.array([0.0, 0, 1.0]), 1.0)
+
+
+def test_success_map_on_the_flat_field_is_centred_on_the_straight_aim():
+    f = load_field("flat")
+    ball = np.array([0.1, 0.0])
+    alphas = np.deg2rad(np.linspace(-10, 10, 201))
+    M = success_map(f, STROKE, ball, f.hole, alphas, [1.0, 1.4])
+    assert M.shape == (2, 201)
+    aim = STROKE.aim(f.hole - ball)[0]
+    ok = alphas[M[1]]
+    assert ok.size > 0 and abs(0.5 * (ok.min() + ok.max()) - aim) < np.deg2rad(0.2)
+    # the map is the ball model's verdict shot by shot
+    V = STROKE.launch_velocity(alphas[::20], 1.4)
+    direct = simulate_shots(f, np.tile(ball, (len(V), 1)), V, engine="numpy").sunk
+    np.testing.assert_array_equal(direct, M[1, ::20])
+
+
+def test_fixed_speed_teacher_sinks_every_taught_shot(datasets):
+    f, ds = datasets["double_hill"]
+    assert len(ds) == 20 and ds.dropped == 0 and ds.strategy == "fixed_speed"
+    assert np.all(ds.kappa == ds.kappa[0])
+    V = ds.stroke.launch_velocity(ds.alpha, ds.kappa)
+    assert simulate_shots(f, ds.ball, V, hole=ds.hole, engine="numpy").sunk.all()
+    # the hole moves sideways along the far edge: alpha grows with it
+    assert np.all(np.diff(ds.hole[:, 1]) > 0) and np.ptp(ds.hole[:, 0]) == 0
+    assert np.corrcoef(ds.hole[:, 1], ds.alpha)[0, 1] > 0.9
+
+
+def test_minimal_speed_teacher_takes_the_slow_strategy(datasets):
+    f, ds = datasets["arctan"]
+    assert ds.strategy == "minimal_speed" and len(ds) + ds.dropped == 56
+    V = ds.stroke.launch_velocity(ds.alpha, ds.kappa)
+    assert simulate_shots(f, ds.ball, V, hole=ds.hole, engine="numpy").sunk.mean() >= 0.9
+    # no successful hit is much slower than the taught one (same situation, same angles)
+    t = Teacher(f, STROKE, **COARSE)
+    i = 10
+    alphas = np.deg2rad(np.linspace(-40, 40, 81))
+    kappas = np.linspace(0.8, ds.kappa[i] - 0.1, 8)
+    assert not success_map(f, STROKE, ds.ball[i], ds.hole[i], alphas, kappas).any()
+    assert t.strategy == "minimal_speed"
+
+
+def test_dataset_round_trip_and_bad_files(tmp_path, datasets):
+    _, ds = datasets["double_hill"]
+    p = tmp_path / "d.npz"
+    ds.save(p)
+    back = HittingDataset.load(p)
+    np.testing.assert_array_equal(back.alpha, ds.alpha)
+    np.testing.assert_array_equal(back.situations, ds.situations)
+    assert back.stroke.speed == ds.stroke.speed and back.strategy == ds.strategy
+    (tmp_path / "bad.npz").write_bytes(b"not a zip")
+    with pytest.raises(ValueError, match="not a hitting data set"):
+        HittingDataset.load(tmp_path / "bad.npz")
+
+
+def test_paper_situations_and_bad_input():
+    f = load_field("rough_flat")
+    b, h = paper_situations(f)
+    assert b.shape == h.shape == (20, 2)
+    b, h = paper_situations(load_field("arctan"))
+    assert len(b) == 56 and len(np.unique(b[:, 0])) == 7 and len(np.unique(b[:, 1])) == 8
+    with pytest.raises(ValueError, match="layout"):
+        paper_situations(f, "circle")
+    with pytest.raises(ValueError, match="strategy"):
+        Teacher(f, STROKE, strategy="fastest")
+    with pytest.raises(ValueError, match="kappa"):
+        Teacher(f, STROKE, kappa=-1.0)
+    with pytest.raises(ValueError, match="ball region"):
+        Teacher(f, STROKE).collect([[5.0, 0.0]], [[2.4, 0.0]])
+    with pytest.raises(ValueError, match="outside the field"):
+        simulate_shots(f, [[0.0, 0.0]], [[1.0, 0.0]], hole=[9.0, 0.0])
+
+
+def _values(rows):
+    """Rows as comparable tuples (NaN speed errors as None: NaN != NaN)."""
+    return [tuple(None if isinstance(v, float) and np.isnan(v) else v
+                  for v in r.__dict__.values()) for r in rows]
+
+
+def test_training_indices():
+    rng = np.random.default_rng(0)
+    line = np.column_stack([np.full(20, 2.3), np.linspace(-0.4, 0.4, 20)])
+    idx = training_indices(line, 10, "spaced", rng)
+    assert len(idx) == 10 and idx[0] == 0 and idx[-1] == 19
+    assert np.all(np.diff(idx) >= 2)
+    r = training_indices(line, 5, "random", rng)
+    assert len(np.unique(r)) == 5
+    X, Y = np.meshgrid(np.arange(7.0), np.arange(8.0), indexing="ij")
+    grid = np.column_stack([X.ravel(), Y.ravel()])
+    idx = training_indices(grid, 28, "spaced", rng)
+    assert len(idx) == 28 and np.all((grid[idx].sum(axis=1) % 2) == 0)  # a checkerboard
+    with pytest.raises(ValueError, match="no test points"):
+        training_indices(line, 20, "random", rng)
+    with pytest.raises(ValueError, match="kind"):
+        training_indices(line, 5, "clustered", rng)
+
+
+def test_table1_runs_end_to_end_and_is_identical_on_local_processes(datasets, tmp_path):
+    means, runs = run_table1(datasets, repetitions=2, seed=3)
+    assert [(r.field, r.training, r.model) for r in means][:2] == [
+        ("double_hill", "5 random", "gpr"), ("double_hill", "5 random", "gmr")]
+    assert len(means) == 3 * 2 + 2 * 3 and len(runs) == 2 * len(means)
+    for r in means:
+        assert 0 <= r.success_rate <= 1 and r.rmse_angle > 0 and r.repetitions == 2
+        assert np.isnan(r.rmse_speed) == (r.field == "double_hill")
+    assert {r.n_params for r in means if r.field == "arctan"} == {72, 120, 60, 45}
+    # models trained on equally spaced points beat 5 random ones on the smooth double hill
+    m = {(r.training, r.model): r for r in means if r.field == "double_hill"}
+    assert m[("10 equally spaced", "gpr")].rmse_angle < m[("5 random", "gpr")].rmse_angle
+    with open_executor(workers=2) as ex:
+        means2, _ = run_table1(datasets, repetitions=2, seed=3, executor=ex)
+    assert _values(means2) == _values(means)
+    path = tmp_path / "table1.csv"
+    write_table1_csv(means, path)
+    with open(path) as fh:
+        rows = list(csv.reader(fh))
+    assert tuple(rows[0]) == CSV_COLUMNS and len(rows) == len(means) + 1
+    assert "paper" in format_table1(means)
+
+
+def test_table1_on_a_dask_local_cluster_gives_the_same_numbers(datasets):
+    distributed = pytest.importorskip("distributed")
+    small = {"double_hill": datasets["double_hill"]}
+    local, _ = run_table1(small, repetitions=2, seed=5)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  host="127.0.0.1", dashboard_address=None) as cluster:
+        with open_executor(dask=cluster.scheduler_address) as ex:
+            remote, _ = run_table1(small, repetitions=2, seed=5, executor=ex)
+    assert _values(remote) == _values(local)
+
+
+def test_unreachable_dask_scheduler_is_a_clear_error():
+    with pytest.raises(ValueError, match="cannot reach the Dask scheduler"):
+        with open_executor(dask="tcp://127.0.0.1:9", timeout=2):
+            pass
+
+
+def test_executors_bad_input_and_inline_errors():
+    with pytest.raises(ValueError, match="workers"):
+        with open_executor(workers=0):
+            pass
+    fut = InlineExecutor().submit(int, "x")
+    with pytest.raises(ValueError):
+        fut.result()
+
+
+def test_table1_rejects_too_small_data_sets(datasets):
+    f, ds = datasets["double_hill"]
+    tiny = HittingDataset(ds.field, ds.strategy, ds.ball[:5], ds.hole[:5], ds.alpha[:5],
+                          ds.kappa[:5], ds.stroke)
+    with pytest.raises(ValueError, match="too few"):
+        run_table1({"double_hill": (f, tiny)}, repetitions=1)
+    with pytest.raises(ValueError, match="repetitions"):
+        run_table1({"double_hill": (f, ds)}, repetitions=0)
+
+
+def test_table1_command_line_quick(tmp_path):
+    out = tmp_path / "t1"
+    r = subprocess.run([sys.executable, "-m", "seds_casadi", "table1", "--quick",
+                        "--field", "double_hill", "--repetitions", "2", "--out", str(out)],
+                       capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    assert "double_hill" in r.stdout and "paper" in r.stdout
+    with open(out / "table1.csv") as fh:
+        rows = list(csv.DictReader(fh))
+    assert len(rows) == 6 and {row["model"] for row in rows} == {"gpr", "gmr"}
+    assert os.path.exists(out / "fig10_gpr_gmr.png")
+    assert os.path.exists(out / "datasets" / "double_hill.npz")
+    bad = subprocess.run([sys.executable, "-m", "seds_casadi", "table1", "--field", "moon",
+                          "--out", str(tmp_path / "x")], capture_output=True, text=True,
+                         timeout=120)
+    assert bad.returncode == 2 and "no field 'moon'" in bad.stderr
