@@ -222,9 +222,12 @@ class Teacher:
         """The fixed speed gain of the ``"fixed_speed"`` strategy."""
         return self._fixed
 
-    def good_shot(self, ball, hole) -> tuple[float, float]:
+    def good_shot(self, ball, hole, reference=None) -> tuple[float, float]:
         """(alpha [rad], kappa) that sinks the ball from ``ball`` into ``hole`` by this
-        teacher's strategy, or (nan, nan) when the strategy has no successful hit there."""
+        teacher's strategy, or (nan, nan) when the strategy has no successful hit there.
+
+        ``reference`` (alpha, kappa), the choice in a neighbouring situation, keeps the
+        strategy: the successful region nearest to it is used (else the rule alone picks)."""
         ball = np.asarray(ball, float)
         hole = np.asarray(hole, float)
         n_a, n_k = self.resolution
@@ -237,19 +240,34 @@ class Teacher:
             if not runs:
                 return np.nan, np.nan
             mids = [0.5 * (alphas[a] + alphas[b - 1]) for a, b in runs]
-            a0, b0 = runs[int(np.argmin([abs(m - aim) for m in mids]))]
+            goal = aim if reference is None else reference[0]
+            a0, b0 = runs[int(np.argmin([abs(m - goal) for m in mids]))]
             return self._refine(ball, hole, alphas, a0, b0, self._fixed), self._fixed
         kappas = np.linspace(*self.kappa_range, n_k)
         M = success_map(self.field, self.stroke, ball, hole, alphas, kappas, self.engine)
         if not M.any():
             return np.nan, np.nan
         lab = _components(M)
-        first = int(np.nonzero(M.any(axis=1))[0][0])
-        # the slowest successful hits (nearest the straight aim among them) pick the region
-        cols = np.flatnonzero(M[first])
-        comp = lab[first, cols[np.argmin(np.abs(alphas[cols] - aim))]]
+        if reference is None:
+            first = int(np.nonzero(M.any(axis=1))[0][0])
+            # the slowest successful hits (nearest the straight aim among them) pick the region
+            cols = np.flatnonzero(M[first])
+            comp = lab[first, cols[np.argmin(np.abs(alphas[cols] - aim))]]
+        else:
+            # the region nearest to the neighbour's choice (grid units in both directions)
+            ki, ai = np.nonzero(M)
+            da = (alphas[ai] - reference[0]) / (alphas[1] - alphas[0])
+            dk = (kappas[ki] - reference[1]) / (kappas[1] - kappas[0])
+            j = int(np.argmin(da * da + dk * dk))
+            comp = lab[ki[j], ai[j]]
         rows = np.flatnonzero((lab == comp).any(axis=1))
         i = rows[0] + int(round(0.25 * (rows[-1] - rows[0])))
+        if reference is not None:
+            # continue the neighbour's speed inside the region (not on its slow edge)
+            lo_row = min(rows[0] + 1, rows[-1])
+            i = int(np.clip(np.argmin(np.abs(kappas - reference[1])), lo_row, rows[-1]))
+            if not (lab[i] == comp).any():
+                i = rows[np.argmin(np.abs(rows - i))]
         kappa = float(kappas[i])
         runs = _runs(lab[i] == comp)
         a0, b0 = max(runs, key=lambda r: r[1] - r[0])
@@ -276,13 +294,27 @@ class Teacher:
                              f"and {holes.shape}")
         self.field.check_situation(balls)
         out = np.full((len(balls), 2), np.nan)
-        it = range(len(balls))
+        # one strategy for the whole set: start from the most central situation by the rule,
+        # then teach each next-nearest situation with its nearest taught neighbour's choice as
+        # the reference (the paper's teacher kept one strategy by hand)
+        S = holes - balls
+        span = np.where(np.ptp(S, axis=0) > 0, np.ptp(S, axis=0), 1.0)
+        Z = (S - np.median(S, axis=0)) / span
+        order = np.argsort(np.sum(Z * Z, axis=1), kind="stable")
+        it = order
         if progress:
             from tqdm.auto import tqdm
 
-            it = tqdm(it, desc=f"teacher on {self.field.name}", leave=False)
+            it = tqdm(order, desc=f"teacher on {self.field.name}", leave=False)
+        done: list[int] = []
         for i in it:
-            out[i] = self.good_shot(balls[i], holes[i])
+            ref = None
+            good = [j for j in done if np.isfinite(out[j, 0])]
+            if good:
+                j = good[int(np.argmin(np.sum((Z[good] - Z[i]) ** 2, axis=1)))]
+                ref = tuple(out[j])
+            out[i] = self.good_shot(balls[i], holes[i], ref)
+            done.append(i)
         ok = np.isfinite(out[:, 0])
         return HittingDataset(self.field.name, self.strategy, balls[ok], holes[ok],
                               out[ok, 0], out[ok, 1], self.stroke,
