@@ -9,6 +9,7 @@ the ball (from the simulation standing in for the sensors) and computes
 2. an orientation reference that keeps the club face perpendicular to the direction of approach
    (the face's normal along the commanded hitting direction R_a psi* projected on the field,
    the shaft vertical), tracked by an angular velocity proportional to the orientation error;
+   arms with five joints (the Katana) track the face's normal only;
 3. joint velocities by damped least squares, qdot = J_w^T (J_w J_w^T + lambda^2 I)^-1 w e,
    with task weights w (position before orientation) and, in the null space of the task, a
    pull towards the home posture and away from joint limits (the WAM's redundancy); joint
@@ -34,7 +35,8 @@ from .ball import BALL_RADIUS
 from .motion import HittingMotion, rotation_z
 from .robots import Robot
 
-__all__ = ["SwingController", "SwingResult", "simulate_swing", "place_head", "default_base"]
+__all__ = ["SwingController", "SwingResult", "Gains", "simulate_swing", "place_head",
+           "default_base", "gravity_ratio", "face_orientation"]
 
 
 def _log3(R: np.ndarray) -> np.ndarray:
@@ -51,6 +53,23 @@ def _log3(R: np.ndarray) -> np.ndarray:
         axis[np.arange(3) != k] = R[k, np.arange(3) != k] / (2 * axis[k])
         return th * axis / np.linalg.norm(axis)
     return th / (2 * np.sin(th)) * w
+
+
+def orientation_error(R: np.ndarray, Rd: np.ndarray, full: bool) -> np.ndarray:
+    """Rotation vector from R towards Rd: all three axes (``full``), or only the face's normal
+    (x axis) for arms with fewer than six joints, which cannot also hold the shaft."""
+    if full:
+        return _log3(Rd @ R.T)
+    return np.cross(R[:, 0], Rd[:, 0])
+
+
+def gravity_ratio(robot: Robot, q) -> float:
+    """max_i |g_i(q)| / effort_i: the share of the effort limits that holding ``q`` takes."""
+    import pinocchio as pin
+
+    g = pin.computeGeneralizedGravity(robot.model, robot.data, np.asarray(q, float))
+    eff = np.where(robot.effort > 0, robot.effort, np.inf)
+    return float(np.max(np.abs(g) / eff))
 
 
 def face_orientation(direction) -> np.ndarray:
@@ -84,12 +103,21 @@ class Gains:
         torque), so one setting fits arms of any size.
     """
 
-    damping: float = 0.05
+    damping: float = 0.01
     orientation_gain: float = 6.0
     orientation_weight: float = 0.3
     posture_gain: float = 1.0
     kp: float = 120.0
     kd: float = 1.0
+
+    @classmethod
+    def for_robot(cls, robot: Robot) -> Gains:
+        """Defaults by arm: five-joint arms (the Katana) hold the face's normal only, gently,
+        so that it does not pull the club head off its path (measured on the Fig. 7 cases:
+        direction errors up to 7 deg with the six-joint settings, 0.5 deg with these)."""
+        if robot.nv < 6:
+            return cls(orientation_gain=1.0, orientation_weight=0.1)
+        return cls()
 
 
 class SwingController:
@@ -107,23 +135,27 @@ class SwingController:
     hit_radius : float
         The club hits the ball when it crosses the plane through the ball perpendicular to the
         commanded direction within this distance of the ball's centre [m].
-    torque_limit : bool
+    torque_limit : bool or None
         Scale the commanded joint acceleration down when a torque would exceed its effort
         limit (gravity and velocity terms are kept): the arm then lags its reference, which the
         closed-loop DS corrects. Without it, torques are whatever inverse dynamics asks for.
+        None: on when the arm can hold its home posture against gravity within its effort
+        limits (the Katana's published efforts cannot: see ``robots/README.md``).
     """
 
     def __init__(self, robot: Robot, motion: HittingMotion, period: float = 0.002,
                  gains: Gains | None = None, rest_mode: str = "flat",
-                 hit_radius: float = 0.02, torque_limit: bool = True) -> None:
+                 hit_radius: float = 0.02, torque_limit: bool | None = None) -> None:
         if not (np.isfinite(period) and period > 0):
             raise ValueError(f"the control period must be positive, got {period}")
         if rest_mode not in ("flat", "arc"):
             raise ValueError(f"unknown resting mode {rest_mode!r}; valid: flat, arc")
         self.robot, self.motion, self.period = robot, motion, float(period)
-        self.gains = gains or Gains()
+        self.gains = gains or Gains.for_robot(robot)
         self.rest_mode = rest_mode
         self.hit_radius = float(hit_radius)
+        if torque_limit is None:
+            torque_limit = gravity_ratio(robot, robot.q_home) < 1.0
         self.torque_limit = bool(torque_limit)
         self._ds = motion.compiled()
         n = robot.nv
@@ -183,7 +215,7 @@ class SwingController:
         v = self.cartesian_command(x, self.contact_point(ball, alpha), alpha, kappa, t)
         direction = self.hit["psi"] if self.hit is not None else \
             rotation_z(alpha) @ self.motion.hitting_direction
-        w = g.orientation_gain * _log3(face_orientation(direction) @ R.T)
+        w = g.orientation_gain * orientation_error(R, face_orientation(direction), r.nv >= 6)
         J = r.head_jacobian(q)
         W = np.array([1, 1, 1] + [g.orientation_weight] * 3, float)
         Jw = W[:, None] * J
@@ -271,35 +303,58 @@ class SwingResult:
                          - 1))
 
 
-def place_head(robot: Robot, position, direction, q0=None, iterations: int = 300,
-               tol: float = 1e-4) -> np.ndarray:
+def place_head(robot: Robot, position, direction, q0=None, iterations: int = 200,
+               tol: float = 1e-3, orientation_weight: float = 0.3, restarts: int = 8,
+               random_state: int = 0) -> np.ndarray:
     """A configuration with the club head at ``position`` (field frame) and its face towards
-    ``direction``, by damped-least-squares iterations from ``q0`` (default the home posture).
+    ``direction``: Levenberg-Marquardt on the weighted pose error, from ``q0`` (default the
+    home posture) and, if that fails, from seeded random configurations within the limits.
 
     Raises ``ValueError`` when the point cannot be reached within ``tol``.
     """
-    q = (robot.q_home if q0 is None else np.asarray(q0, float)).copy()
     target = np.asarray(position, float)
     Rd = face_orientation(direction)
-    for _ in range(iterations):
+    W = np.array([1, 1, 1] + [orientation_weight] * 3)
+    rng = np.random.default_rng(random_state)
+
+    def err(q):
         x, R = robot.head_pose(q)
-        e = np.concatenate([target - x, 0.3 * _log3(Rd @ R.T)])
-        if np.linalg.norm(e[:3]) < tol:
+        return W * np.concatenate([target - x, orientation_error(R, Rd, robot.nv >= 6)])
+
+    best_pos = np.inf
+    seeds = [robot.q_home if q0 is None else np.asarray(q0, float)]
+    seeds += [rng.uniform(robot.lower * 0.8, robot.upper * 0.8) for _ in range(restarts)]
+    # the full orientation first; an arm that cannot hold it there (five joints) gets the
+    # position with the orientation as close as its weight allows
+    for q, w in [(s, orientation_weight) for s in seeds] + [(s, 0.03) for s in seeds]:
+        W[3:] = w
+        q = np.clip(q.copy(), robot.lower, robot.upper)
+        e = err(q)
+        lam = 1e-2
+        for _ in range(iterations):
+            if np.linalg.norm(e[:3]) < tol:
+                break
+            J = W[:, None] * robot.head_jacobian(q)
+            dq = np.linalg.solve(J.T @ J + lam * np.eye(robot.nv), J.T @ e)
+            q_new = np.clip(q + dq, robot.lower, robot.upper)
+            e_new = err(q_new)
+            if e_new @ e_new < e @ e:
+                q, e, lam = q_new, e_new, max(lam / 3, 1e-6)
+            else:
+                lam *= 5
+                if lam > 1e6:
+                    break
+        pos = float(np.linalg.norm(e[:3]))
+        best_pos = min(best_pos, pos)
+        if pos < tol:
             return q
-        J = robot.head_jacobian(q)
-        J[3:] *= 0.3
-        dq = J.T @ np.linalg.solve(J @ J.T + 1e-4 * np.eye(6), e)
-        dq += 0.05 * (np.eye(robot.nv) - np.linalg.pinv(J) @ J) @ (robot.q_home - q)
-        q = np.clip(q + np.clip(dq, -0.2, 0.2), robot.lower, robot.upper)
-    x, _ = robot.head_pose(q)
     raise ValueError(f"{robot.name}: cannot place the club head at {np.round(target, 3).tolist()}"
-                     f" (closest {np.linalg.norm(target - x):.3f} m away): move the base or "
-                     f"the start")
+                     f" (closest {best_pos:.3f} m away): move the base or the start")
 
 
 def default_base(name: str) -> tuple:
     """A base placement beside a ball at the origin, the robot facing the field's -y side."""
-    return {"wam": (0.0, 0.55, 0.0, -np.pi / 2), "katana": (0.0, 0.28, 0.0, -np.pi / 2)}.get(
+    return {"wam": (0.0, 0.55, 0.0, -np.pi / 2), "katana": (0.0, 0.45, 0.1, -np.pi / 2)}.get(
         name, (0.0, 0.5, 0.0, -np.pi / 2))
 
 

@@ -255,7 +255,7 @@ _ERD_ARMS = {
     "z1": ("z1_description/urdf/z1.urdf", "link06", [0, 1.2, -1.2, 0, 0, 0]),
 }
 _OWN = {"wam": ("wam7.urdf", "wam_flange", [0, -0.6, 0, 2.4, 0, 0.9, 0]),
-        "katana": ("katana_6m180.urdf", "katana_flange", [0, 1.2, -1.2, -1.0, 0])}
+        "katana": ("katana_6m180.urdf", "katana_flange", [-0.27, 0.99, -1.066, 0.812, -1.321])}
 
 
 def robot_names() -> list[str]:

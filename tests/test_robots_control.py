@@ -1,0 +1,231 @@
+"""Robots (URDF against DH tables, Jacobians, dynamics) and the 500 Hz swing controller."""
+
+import os
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from seds_casadi.control import (
+    SwingController,
+    default_base,
+    gravity_ratio,
+    place_head,
+    simulate_swing,
+)
+from seds_casadi.datasets import load_hitting_demos
+from seds_casadi.motion import HittingMotion, rotation_z
+from seds_casadi.robots import (
+    KATANA_ORIGINS,
+    KATANA_TOOL,
+    ROBOTS_FOLDER,
+    WAM_DH,
+    Club,
+    katana_urdf,
+    load_robot,
+    robot_names,
+    wam_urdf,
+)
+
+RNG = np.random.default_rng(7)
+
+
+@pytest.fixture(scope="module")
+def motion():
+    return HittingMotion.fit(load_hitting_demos(), n_components=3)
+
+
+def _T(R=np.eye(3), p=(0, 0, 0)):
+    T = np.eye(4)
+    T[:3, :3] = R
+    T[:3, 3] = p
+    return T
+
+
+def _rz(a):
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1.0]])
+
+
+def _rx(a):
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
+
+
+def _rpy(r, p, y):
+    cy, sy, cp, sp = np.cos(y), np.sin(y), np.cos(p), np.sin(p)
+    Ry = np.array([[cp, 0, sp], [0, 1, 0], [-sp, 0, cp]])
+    Rz = np.array([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1.0]])
+    return Rz @ Ry @ _rx(r)
+
+
+def _random_q(r):
+    return RNG.uniform(r.lower, r.upper)
+
+
+def test_shipped_urdfs_are_the_generated_ones():
+    with open(os.path.join(ROBOTS_FOLDER, "wam7.urdf")) as fh:
+        assert fh.read() == wam_urdf()
+    with open(os.path.join(ROBOTS_FOLDER, "katana_6m180.urdf")) as fh:
+        assert fh.read() == katana_urdf()
+
+
+def test_wam_forward_kinematics_matches_the_dh_table():
+    r = load_robot("wam")
+    fl = r.model.getFrameId("wam_flange")
+    for _ in range(20):
+        q = _random_q(r)
+        T = _T(p=(0, 0, 0.346))
+        for (alpha, a, d), qi in zip(WAM_DH, q):
+            T = T @ _T(_rz(qi)) @ _T(p=(0, 0, d)) @ _T(p=(a, 0, 0)) @ _T(_rx(alpha))
+        T = T @ _T(_rx(np.pi / 2))  # tool plate
+        pin.framesForwardKinematics(r.model, r.data, q)
+        M = r.data.oMf[fl]
+        np.testing.assert_allclose(M.translation, T[:3, 3], atol=1e-8)
+        np.testing.assert_allclose(M.rotation, T[:3, :3], atol=1e-8)
+
+
+def test_katana_forward_kinematics_matches_the_joint_origins():
+    r = load_robot("katana")
+    fl = r.model.getFrameId("katana_flange")
+    for _ in range(20):
+        q = _random_q(r)
+        T = np.eye(4)
+        for (xyz, rpy), qi in zip(KATANA_ORIGINS, q):
+            T = T @ _T(_rpy(*rpy), xyz) @ _T(_rz(qi))
+        T = T @ _T(_rpy(*KATANA_TOOL[1]), KATANA_TOOL[0])
+        pin.framesForwardKinematics(r.model, r.data, q)
+        np.testing.assert_allclose(r.data.oMf[fl].translation, T[:3, 3], atol=1e-8)
+        np.testing.assert_allclose(r.data.oMf[fl].rotation, T[:3, :3], atol=1e-8)
+
+
+@pytest.mark.parametrize("name", ["wam", "katana", "panda", "ur5"])
+def test_head_jacobian_matches_finite_differences(name):
+    r = load_robot(name, base=(0.2, -0.1, 0.05, 0.7))
+    for _ in range(3):
+        q = _random_q(r)
+        J = r.head_jacobian(q)
+        x0, R0 = r.head_pose(q)
+        eps = 1e-7
+        for i in range(r.nv):
+            dq = np.zeros(r.nv)
+            dq[i] = eps
+            x1, R1 = r.head_pose(q + dq)
+            np.testing.assert_allclose((x1 - x0) / eps, J[:3, i], atol=1e-5)
+            W = (R1 @ R0.T - np.eye(3)) / eps  # skew(omega)
+            np.testing.assert_allclose([W[2, 1], W[0, 2], W[1, 0]], J[3:, i], atol=1e-5)
+
+
+@pytest.mark.parametrize("name", ["wam", "katana", "panda"])
+def test_rnea_and_aba_are_inverse(name):
+    r = load_robot(name)
+    for _ in range(5):
+        q, qd = _random_q(r), RNG.normal(size=r.nv)
+        qdd = RNG.normal(size=r.nv)
+        tau = pin.rnea(r.model, r.data, q, qd, qdd)
+        np.testing.assert_allclose(pin.aba(r.model, r.data, q, qd, tau), qdd, atol=1e-8)
+
+
+def test_club_inertia_and_head_frame():
+    c = Club(0.5, 0.1, 0.3)
+    inert = c.inertia()
+    assert inert.mass == pytest.approx(0.4)
+    assert inert.lever[2] == pytest.approx((0.1 * 0.25 + 0.3 * 0.5) / 0.4)
+    r = load_robot("wam", club=c)
+    fl = r.model.getFrameId("wam_flange")
+    q = _random_q(r)
+    pin.framesForwardKinematics(r.model, r.data, q)
+    head = r.data.oMf[r.head_frame]
+    flange = r.data.oMf[fl]
+    # the head is 0.5 m along the flange's z axis; its x axis (face normal) is the flange's x
+    np.testing.assert_allclose(head.translation, flange.translation + 0.5 * flange.rotation[:, 2],
+                               atol=1e-8)
+    np.testing.assert_allclose(head.rotation[:, 0], flange.rotation[:, 0], atol=1e-8)
+    # the club's mass is carried by the last link
+    bare = pin.buildModelFromUrdf(os.path.join(ROBOTS_FOLDER, "wam7.urdf"))
+    assert sum(i.mass for i in r.model.inertias) == pytest.approx(
+        sum(i.mass for i in bare.inertias) + 0.4)
+
+
+def test_every_known_robot_loads_with_its_club():
+    for name in robot_names():
+        r = load_robot(name)
+        assert r.nv == r.model.nq and r.nv >= 5
+        x, R = r.head_pose(r.q_home)
+        assert np.all(np.isfinite(x)) and np.allclose(R.T @ R, np.eye(3))
+
+
+def _fig7_cases(name):
+    """Ball moved sideways (Fig. 7a) and three holes (Fig. 7b): (ball, alpha) pairs."""
+    out = []
+    for dy in (0.0, -0.09, -0.18):
+        ball = np.array([0.0, dy, 0.02135])
+        for hole_y in (-0.3, 0.0, 0.3):
+            s = np.array([2.4, hole_y]) - ball[:2]
+            out.append((ball, float(np.arctan2(s[1], s[0]))))
+    return out
+
+
+@pytest.mark.parametrize("name,kappa,cases", [("wam", 1.0, slice(0, 9, 2)),
+                                              ("katana", 0.4, slice(1, 9, 2))])
+def test_swings_hit_with_the_commanded_velocity(name, kappa, cases, motion):
+    r = load_robot(name, base=default_base(name))
+    for ball, alpha in _fig7_cases(name)[cases]:
+        res = simulate_swing(r, motion, ball, alpha, kappa)
+        assert res.hit, (name, ball, alpha)
+        assert res.direction_error_deg <= 2.0, (name, ball, alpha, res.direction_error_deg)
+        assert res.speed_error <= 0.05, (name, ball, alpha, res.speed_error)
+        assert res.limits_ok
+        # after the hit the resting mode slows the club down
+        v_end = np.linalg.norm(res.head[-1] - res.head[-2]) / (res.t[-1] - res.t[-2])
+        assert v_end < 0.5 * np.linalg.norm(res.hit_velocity)
+        if name == "wam":
+            assert res.peak_torque_ratio <= 1.0 + 1e-9
+        else:
+            # the Katana's published efforts cannot even hold it against gravity
+            assert gravity_ratio(r, r.q_home) > 1
+
+
+def test_example_robot_data_arm_swings_with_the_same_controller(motion):
+    r = load_robot("panda", base=(0.0, 0.55, 0.0, -np.pi / 2))
+    res = simulate_swing(r, motion, np.array([0.0, 0.0, 0.02135]), 0.05, 1.0)
+    assert res.hit and res.direction_error_deg <= 2.0 and res.speed_error <= 0.05
+    assert res.limits_ok and res.peak_torque_ratio <= 1.0 + 1e-9
+
+
+def test_ball_moved_mid_swing_is_still_hit(motion):
+    r = load_robot("wam", base=default_base("wam"))
+    ball = np.array([0.0, 0.0, 0.02135])
+    res = simulate_swing(r, motion, ball, 0.0, 1.0,
+                         perturb=[{"t": 0.2, "ball": ball + np.array([0, -0.04, 0])}])
+    assert res.hit and res.direction_error_deg <= 3.0
+
+
+def test_bad_inputs(tmp_path, motion):
+    with pytest.raises(ValueError, match="unknown robot 'r2d2'.*wam, katana"):
+        load_robot("r2d2")
+    bad = tmp_path / "bad.urdf"
+    bad.write_text("<robot name='x'><link name='a'></robot>")
+    with pytest.raises(ValueError, match="failed to load"):
+        load_robot(str(bad), flange="a")
+    with pytest.raises(ValueError, match="flange"):
+        load_robot(str(bad))
+    with pytest.raises(ValueError, match="below the field"):
+        load_robot("wam", base=(0, 0.5, -0.2, 0))
+    r = load_robot("katana", base=default_base("katana"))
+    with pytest.raises(ValueError, match="beyond the club's reach"):
+        simulate_swing(r, motion, np.array([2.0, 0.0, 0.02]))
+    with pytest.raises(ValueError, match="period must be positive"):
+        SwingController(r, motion, period=0.0)
+    with pytest.raises(ValueError, match="cannot place the club head"):
+        place_head(r, np.array([0.0, 0.45, 1.5]), np.array([1.0, 0, 0]), restarts=1)
+
+
+def test_start_is_placed_behind_the_ball_facing_the_hit(motion):
+    r = load_robot("wam", base=default_base("wam"))
+    target = np.array([-0.3, 0.02, 0.07])
+    d = rotation_z(0.1) @ np.array([1.0, 0, 0])
+    q = place_head(r, target, d)
+    x, R = r.head_pose(q)
+    np.testing.assert_allclose(x, target, atol=1e-3)
+    assert R[:, 0] @ d > np.cos(np.deg2rad(2))
