@@ -214,7 +214,9 @@ class SwingController:
                 if np.linalg.norm(p_hit - target) <= self.hit_radius:
                     self.hit = {"t": t, "position": p_hit, "psi": psi.copy(),
                                 "commanded": kappa * self.motion.hitting_speed * psi}
-                    v = np.asarray(self._ds(x - target, alpha, kappa))
+                    # the DS's velocity just before the contact point (past it, the attractor
+                    # points back): the resting mode continues it and slows down
+                    v = np.asarray(self._ds(p0 - target, alpha, kappa))
                     self._rest = self.motion._rest_system(p_hit, v, self.rest_mode)
         self._prev = x
 

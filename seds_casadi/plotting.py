@@ -12,7 +12,7 @@ import os
 import numpy as np
 
 __all__ = ["plot_streamlines", "save_figure", "plot_success_map", "plot_regression_1d",
-           "plot_joint_gmm", "plot_field"]
+           "plot_joint_gmm", "plot_field", "plot_arm_frames"]
 
 
 def _plt():
@@ -256,4 +256,42 @@ def plot_field(field, ax=None, paths=None, sunk=None, ball=None, hole=None, n: i
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.set_title(field.name, fontsize=9)
+    return ax
+
+
+def plot_arm_frames(robot, qs, ax=None, ball=None, colors=None, alpha_min: float = 0.25):
+    """Fig. 6g: the arm as a chain of joint positions with its club, at several configurations,
+    in a 3-D axis (later frames darker).
+
+    Parameters
+    ----------
+    robot : Robot
+    qs : array, shape (k, nv)
+    ball : array, shape (3,), optional
+    """
+    import pinocchio as pin
+
+    plt = _plt()
+    if ax is None:
+        fig = plt.figure(figsize=(6, 5))
+        ax = fig.add_subplot(projection="3d")
+    M = robot.base_placement
+    for i, q in enumerate(qs):
+        pin.framesForwardKinematics(robot.model, robot.data, np.asarray(q, float))
+        pts = [M.translation] + [(M * robot.data.oMi[j]).translation
+                                 for j in range(1, robot.model.njoints)]
+        head = (M * robot.data.oMf[robot.head_frame]).translation
+        fl = robot.model.frames[robot.head_frame].parentFrame
+        flange = (M * robot.data.oMf[fl]).translation
+        P = np.array(pts + [flange])
+        a = alpha_min + (1 - alpha_min) * i / max(1, len(qs) - 1)
+        c = colors[i] if colors is not None else "k"
+        ax.plot(P[:, 0], P[:, 1], P[:, 2], "-o", color=c, ms=2.5, lw=1.6, alpha=a)
+        ax.plot([flange[0], head[0]], [flange[1], head[1]], [flange[2], head[2]], "-",
+                color="tab:brown", lw=2.2, alpha=a)
+    if ball is not None:
+        ax.scatter(*np.asarray(ball, float), s=40, color="w", edgecolors="k")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_zlabel("z [m]")
     return ax

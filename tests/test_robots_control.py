@@ -155,14 +155,16 @@ def test_every_known_robot_loads_with_its_club():
         assert np.all(np.isfinite(x)) and np.allclose(R.T @ R, np.eye(3))
 
 
-def _fig7_cases(name):
-    """Ball moved sideways (Fig. 7a) and three holes (Fig. 7b): (ball, alpha) pairs."""
+def _fig7_cases(motion):
+    """Ball moved sideways (Fig. 7a) and three holes (Fig. 7b): (ball, alpha) pairs, alpha
+    turning the default hit psi* towards the hole."""
+    psi = motion.hitting_direction
     out = []
     for dy in (0.0, -0.09, -0.18):
         ball = np.array([0.0, dy, 0.02135])
         for hole_y in (-0.3, 0.0, 0.3):
             s = np.array([2.4, hole_y]) - ball[:2]
-            out.append((ball, float(np.arctan2(s[1], s[0]))))
+            out.append((ball, float(np.arctan2(s[1], s[0]) - np.arctan2(psi[1], psi[0]))))
     return out
 
 
@@ -170,15 +172,18 @@ def _fig7_cases(name):
                                               ("katana", 0.4, slice(1, 9, 2))])
 def test_swings_hit_with_the_commanded_velocity(name, kappa, cases, motion):
     r = load_robot(name, base=default_base(name))
-    for ball, alpha in _fig7_cases(name)[cases]:
+    for ball, alpha in _fig7_cases(motion)[cases]:
         res = simulate_swing(r, motion, ball, alpha, kappa)
         assert res.hit, (name, ball, alpha)
         assert res.direction_error_deg <= 2.0, (name, ball, alpha, res.direction_error_deg)
         assert res.speed_error <= 0.05, (name, ball, alpha, res.speed_error)
         assert res.limits_ok
-        # after the hit the resting mode slows the club down
+        # after the hit the resting mode slows the club down, still moving forwards
         v_end = np.linalg.norm(res.head[-1] - res.head[-2]) / (res.t[-1] - res.t[-2])
         assert v_end < 0.5 * np.linalg.norm(res.hit_velocity)
+        i = np.searchsorted(res.t, res.hit_time)
+        psi = res.commanded / np.linalg.norm(res.commanded)
+        assert (res.head[-1] - res.head[i]) @ psi > 0.02
         if name == "wam":
             assert res.peak_torque_ratio <= 1.0 + 1e-9
         else:
