@@ -425,7 +425,8 @@ def default_base(name: str) -> tuple:
 def simulate_swing(robot: Robot, motion: HittingMotion, ball, alpha: float = 0.0,
                    kappa: float = 1.0, start=None, period: float = 0.002, substeps: int = 4,
                    max_time: float = 3.0, rest_time: float = 0.4, gains: Gains | None = None,
-                   perturb=None, rest_mode: str = "flat") -> SwingResult:
+                   perturb=None, rest_mode: str = "flat", hole=None,
+                   params=None) -> SwingResult:
     """Swing at the ball with the 500 Hz controller on the robot's forward dynamics.
 
     Parameters
@@ -445,12 +446,22 @@ def simulate_swing(robot: Robot, motion: HittingMotion, ball, alpha: float = 0.0
     max_time, rest_time : float
         Give up without a hit after ``max_time``; simulate ``rest_time`` after the hit.
     perturb : list of dict, optional
-        ``{"t": time, "ball": new position}`` applied during the swing (no re-planning).
+        ``{"t": time, "ball": new position}`` and/or ``"hole"`` applied during the swing (no
+        re-planning), as in the paper's Fig. 8.
+    hole : array, shape (2,) or (3,), optional
+        The hole, read by ``params`` every tick.
+    params : callable, optional
+        ``params(ball, hole) -> (alpha, kappa)``, evaluated every tick from the current ball
+        and hole (e.g. a hitting-parameter model on the situation hole - ball); overrides
+        ``alpha`` and ``kappa``.
     """
     import pinocchio as pin
 
     ball = np.asarray(ball, float).copy()
+    hole = None if hole is None else np.asarray(hole, float).copy()
     robot.check_reach(ball)
+    if params is not None:
+        alpha, kappa = (float(v) for v in params(ball, hole))
     if start is None:
         start = rotation_z(alpha) @ np.array([-0.3, 0.0, 0.05])
     psi = rotation_z(alpha) @ motion.hitting_direction
@@ -466,8 +477,13 @@ def simulate_swing(robot: Robot, motion: HittingMotion, ball, alpha: float = 0.0
     ei = 0
     while t < t_end - 1e-12:
         while ei < len(events) and events[ei]["t"] <= t + 1e-12:
-            ball = np.asarray(events[ei]["ball"], float).copy()
+            if "ball" in events[ei]:
+                ball = np.asarray(events[ei]["ball"], float).copy()
+            if "hole" in events[ei]:
+                hole = np.asarray(events[ei]["hole"], float).copy()
             ei += 1
+        if params is not None and ctl.hit is None:
+            alpha, kappa = (float(v) for v in params(ball, hole))
         had_hit = ctl.hit is not None
         t0 = time.perf_counter_ns()
         tau = ctl.tick(q, qd, ball, alpha, kappa, t)

@@ -377,7 +377,7 @@ def _attach_club(model, flange: str, club: Club):
 
 
 def load_robot(name_or_path: str, club: Club | None = None, base=(0.0, 0.0, 0.0, 0.0),
-               flange: str | None = None, q_home=None) -> Robot:
+               flange: str | None = None, q_home=None, field=None) -> Robot:
     """A robot by name (:func:`robot_names`) or a URDF file (then give ``flange``).
 
     Parameters
@@ -390,6 +390,8 @@ def load_robot(name_or_path: str, club: Club | None = None, base=(0.0, 0.0, 0.0,
     flange, q_home : optional
         The frame the club is attached to and a home configuration (required for a URDF path
         that is not one of the known robots; q_home defaults to the middle of the limits).
+    field : Field, optional
+        The field the robot stands on: its base must not be below the field's surface there.
     """
     import pinocchio as pin
 
@@ -431,7 +433,7 @@ def load_robot(name_or_path: str, club: Club | None = None, base=(0.0, 0.0, 0.0,
     if home.shape != (model.nq,):
         raise ValueError(f"q_home has {home.size} values for {model.nq} joints")
     robot = Robot(name, model, head, home, base, club)
-    _check_base(robot)
+    _check_base(robot, field)
     return robot
 
 
@@ -453,8 +455,9 @@ def _revolute_only(text: str) -> str:
     return re.sub(r'<joint[^>]*type="continuous"[^>]*>.*?</joint>', fix, text, flags=re.S)
 
 
-def _check_base(robot: Robot) -> None:
-    z = robot.base[2]
-    if z < 0:
-        raise ValueError(f"{robot.name}: the base at z = {z:.3f} m is below the field "
-                         f"surface (z = 0): raise it")
+def _check_base(robot: Robot, field=None) -> None:
+    x, y, z = robot.base[:3]
+    ground = 0.0 if field is None else float(field.surface.height(np.array([[x, y]]))[0])
+    if z < ground - 1e-9:
+        raise ValueError(f"{robot.name}: the base at z = {z:.3f} m is inside the field surface "
+                         f"(z = {ground:.3f} m there): raise it to at least the surface")

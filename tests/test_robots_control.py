@@ -198,6 +198,27 @@ def test_example_robot_data_arm_swings_with_the_same_controller(motion):
     assert res.limits_ok and res.peak_torque_ratio <= 1.0 + 1e-9
 
 
+def test_hitting_parameters_follow_a_hole_moved_mid_swing(motion):
+    # Fig. 8b: the hole moves during the swing; alpha is recomputed every tick from the
+    # situation, without re-planning, and the hit goes where the moved hole asks
+    r = load_robot("wam", base=default_base("wam"))
+    ball = np.array([0.0, 0.0, 0.02135])
+    psi = motion.hitting_direction
+    seen = []
+
+    def aim(b, h):
+        seen.append(h[1])
+        return np.arctan2(h[1] - b[1], h[0] - b[0]) - np.arctan2(psi[1], psi[0]), 1.0
+
+    res = simulate_swing(r, motion, ball, hole=[2.4, 0.0], params=aim,
+                         perturb=[{"t": 0.15, "hole": [2.4, -0.3]}])
+    assert res.hit and seen[0] == 0.0 and seen[-1] == -0.3
+    v = res.hit_velocity
+    to_hole = np.array([2.4, -0.3]) - ball[:2]
+    angle = np.degrees(np.arccos(v[:2] @ to_hole / np.linalg.norm(v[:2]) / np.linalg.norm(to_hole)))
+    assert angle < 2.0
+
+
 def test_ball_moved_mid_swing_is_still_hit(motion):
     r = load_robot("wam", base=default_base("wam"))
     ball = np.array([0.0, 0.0, 0.02135])
@@ -215,8 +236,14 @@ def test_bad_inputs(tmp_path, motion):
         load_robot(str(bad), flange="a")
     with pytest.raises(ValueError, match="flange"):
         load_robot(str(bad))
-    with pytest.raises(ValueError, match="below the field"):
+    with pytest.raises(ValueError, match="inside the field surface"):
         load_robot("wam", base=(0, 0.5, -0.2, 0))
+    from seds_casadi.fields import load_field
+
+    hills = load_field("double_hill")
+    with pytest.raises(ValueError, match="inside the field surface"):
+        load_robot("wam", base=(0.9, 0.22, 0.01, 0), field=hills)  # on top of a hill
+    assert load_robot("wam", base=(0.9, 0.22, 0.05, 0), field=hills).base[2] == 0.05
     r = load_robot("katana", base=default_base("katana"))
     with pytest.raises(ValueError, match="beyond the club's reach"):
         simulate_swing(r, motion, np.array([2.0, 0.0, 0.02]))
