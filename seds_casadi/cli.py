@@ -5,6 +5,7 @@ Commands
 fit     fit a stable DS to demonstrations in a .npz/.csv file; write the model and a figure
 lasa    run the LASA handwriting benchmark; write lasa.csv, summary.txt and figures
 table1  the paper's Table 1 (GPR vs GMR for the hitting parameters); write table1.csv, figures
+validate shots by a robot checked in exudyn against the fast ball model; validation.csv, report
 """
 
 from __future__ import annotations
@@ -85,6 +86,16 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--quick", action="store_true",
                    help="3 repetitions and a coarser teacher: a check in about a minute")
     t.add_argument("--out", default="table1_out", help="output folder [table1_out]")
+
+    v = sub.add_parser("validate", help="check shots in an exudyn multibody model",
+                       description="Shots chosen by the learned hitting-parameter model and "
+                                   "executed by the robot's controller, played on the fast ball "
+                                   "model and in exudyn (ball on the field mesh with contact).")
+    v.add_argument("--robot", default="wam", help="robot name [wam]")
+    v.add_argument("--field", default="flat", help="field name or .json file [flat]")
+    v.add_argument("--shots", type=int, default=10, help="number of shots [10]")
+    v.add_argument("--seed", type=int, default=0, help="random seed [0]")
+    v.add_argument("--out", default="validate_out", help="output folder [validate_out]")
     return p
 
 
@@ -138,6 +149,13 @@ def _cmd_table1(a) -> int:
     return 0
 
 
+def _cmd_validate(a) -> int:
+    from .validation import validate
+
+    validate(a.robot, a.field, a.shots, a.out, a.seed, progress=sys.stderr.isatty())
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``seds-casadi``; returns the exit code."""
     parser = build_parser()
@@ -155,6 +173,8 @@ def main(argv: list[str] | None = None) -> int:
             return _cmd_lasa(a)
         if a.command == "table1":
             return _cmd_table1(a)
+        if a.command == "validate":
+            return _cmd_validate(a)
     except (ValueError, TypeError, FileNotFoundError, SEDSError) as exc:
         print(f"seds-casadi {a.command}: error: {exc}", file=sys.stderr)
         return 2

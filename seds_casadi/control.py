@@ -164,6 +164,7 @@ class SwingController:
         self._zero_rest = (np.zeros(9), np.zeros(3))
         Mb = robot.base_placement
         self._base = (Mb.rotation.copy(), Mb.translation.copy())
+        self._base_flat = np.concatenate([Mb.rotation.ravel(order="F"), Mb.translation])
         n = robot.nv
         self._margin = 0.05 * (robot.upper - robot.lower)
         self._effort = np.where(robot.effort > 0, robot.effort, np.inf)
@@ -243,7 +244,7 @@ class SwingController:
         out = self._step(np.concatenate([
             q, qd, self.q_ref, self.qd_ref, M.translation, M.rotation.ravel(order="F"),
             Jl.ravel(order="F"), target, (alpha, kappa, float(self._rest is not None)),
-            rest[0], rest[1], direction]))
+            rest[0], rest[1], direction, self._base_flat]))
         n = r.nv
         self.qd_ref, self.q_ref, a = out[:n], out[n:2 * n], out[2 * n:3 * n]
         tau = pin.rnea(r.model, r.data, q, qd, a).copy()
@@ -274,7 +275,8 @@ def _tick_function(ctl: SwingController):
     target, alpha, kappa, resting = (ca.SX.sym("target", 3), ca.SX.sym("alpha"),
                                      ca.SX.sym("kappa"), ca.SX.sym("resting"))
     A, rest, direction = ca.SX.sym("A", 3, 3), ca.SX.sym("rest", 3), ca.SX.sym("dir", 3)
-    Rb, pb = (ca.DM(v) for v in ctl._base)
+    # the base placement is an input, so that one compiled tick serves any placement
+    Rb, pb = ca.SX.sym("Rb", 3, 3), ca.SX.sym("pb", 3)
     x = Rb @ p_loc + pb
     R = Rb @ R_loc
     J = ca.vertcat(Rb @ J_loc[:3, :], Rb @ J_loc[3:, :])
@@ -308,7 +310,7 @@ def _tick_function(ctl: SwingController):
     wn = g.kp
     acc = qdd_ref + wn * wn * (q_next - q) + 2 * g.kd * wn * (qd_new - qd)
     parts = [q, qd, q_ref, qd_ref, p_loc, R_loc, J_loc, target, alpha, kappa, resting, A, rest,
-             direction]
+             direction, Rb, pb]
     flat = ca.vertcat(*[ca.vec(s) for s in parts])
     # one packed input: a Python call then copies one array, not fourteen
     z = ca.SX.sym("z", flat.numel())

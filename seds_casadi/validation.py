@@ -1,0 +1,455 @@
+"""Validation in exudyn: a club head striking a ball that rolls on the field's triangle mesh.
+
+The independent judge of the fast ball model (:mod:`seds_casadi.ball`): the same shot is
+simulated as a multibody system with contact, and the two are compared.
+
+* **Field**: a triangle mesh of z = H(x, y) (:func:`field_mesh`, normals up), plus vertical wall
+  strips on fields with walls. Ball-field contact is exudyn's sphere-triangle contact with
+  Coulomb friction (mu = 0.2: the skid after the impact and its turn into rolling come out of
+  the contact, not from the fast model's formula).
+* **Rolling resistance**: exudyn's contact has Coulomb friction only, so a force rho m g (times
+  the field's local friction factor) against the ball's velocity acts at its centre while it
+  rolls; on a rolling ball it decelerates it by (5/7) rho g, as in the fast model.
+* **Ball**: a rigid sphere (46 g, radius 21.35 mm, solid-sphere inertia 2/5 m r^2).
+* **Club head**: a rigid sphere of the impact model's effective mass (0.35 kg) launched with the
+  club-head velocity measured at the hit (from the robot simulation), its contact with the ball a
+  spring-damper whose damping gives the restitution 0.8 of the impact model. After the contact
+  the head is braked (time constant 20 ms), standing in for the arm's resting mode, so that it
+  does not catch up with the ball (there is no arm behind it yet: the arm as an exudyn
+  kinematic tree is the next step).
+* **Hole**: a capture region: the ball drops when its centre is over the hole and its speed is
+  below the capture speed for its offset (the fast model's chord criterion).
+
+Integration: explicit 4th-order Runge-Kutta with Lie-group rotations, step 0.2 ms (14 steps per
+period of the stiffest contact, head on ball).
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .ball import BALL_MASS, BALL_RADIUS, CLUB_MASS, MU_SLIDE, RESTITUTION, STOP_SPEED, G
+from .ball import capture_speed as _capture_speed
+from .fields import Field
+
+__all__ = ["field_mesh", "ExudynShot", "simulate_shot_exudyn", "MAX_TRIANGLES"]
+
+MAX_TRIANGLES = 60_000
+HEAD_RADIUS = 0.02
+
+
+def field_mesh(field: Field, spacing: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Triangle mesh of the field's surface over its bounds: points (n, 3), triangles (m, 3)
+    with normals pointing up.
+
+    ``spacing`` [m] defaults to 3 cm on curved fields and to the whole field on a plane.
+    Raises ``ValueError`` when the mesh would exceed :data:`MAX_TRIANGLES`.
+    """
+    b = field.bounds
+    if spacing is None:
+        spacing = max(b[1] - b[0], b[3] - b[2]) if field.surface.shape == "plane" else 0.03
+    if not (np.isfinite(spacing) and spacing > 0):
+        raise ValueError(f"spacing must be positive, got {spacing}")
+    nx = max(2, int(np.ceil((b[1] - b[0]) / spacing)) + 1)
+    ny = max(2, int(np.ceil((b[3] - b[2]) / spacing)) + 1)
+    n_trig = 2 * (nx - 1) * (ny - 1)
+    if n_trig > MAX_TRIANGLES:
+        raise ValueError(f"a {spacing:g} m mesh of the field {field.name!r} has {n_trig} "
+                         f"triangles, more than the {MAX_TRIANGLES} the contact solver handles "
+                         f"here: use a larger spacing (at least "
+                         f"{spacing * np.sqrt(n_trig / MAX_TRIANGLES):.3f} m)")
+    xs, ys = np.linspace(b[0], b[1], nx), np.linspace(b[2], b[3], ny)
+    X, Y = np.meshgrid(xs, ys)  # rows along y
+    P = np.column_stack([X.ravel(), Y.ravel()])
+    pts = np.column_stack([P, field.surface.height(P)])
+    i, j = np.meshgrid(np.arange(nx - 1), np.arange(ny - 1))
+    a = (j * nx + i).ravel()
+    tri = np.concatenate([np.column_stack([a, a + 1, a + nx + 1]),
+                          np.column_stack([a, a + nx + 1, a + nx])])
+    return pts, tri
+
+
+def _walls(field: Field, height: float = 0.1):
+    """Vertical strips along the bounds, from below the lowest to above the highest point of
+    the surface along each side; normals pointing into the field."""
+    b = field.bounds
+    corners = [(b[0], b[2]), (b[1], b[2]), (b[1], b[3]), (b[0], b[3])]
+    pts, tri = [], []
+    for k in range(4):
+        (x0, y0), (x1, y1) = corners[k], corners[(k + 1) % 4]
+        s = np.linspace(0, 1, 200)[:, None]
+        h = field.surface.height((1 - s) * np.array([x0, y0]) + s * np.array([x1, y1]))
+        z0, z1 = float(h.min()) - 0.05, float(h.max()) + height
+        base = len(pts)
+        pts += [(x0, y0, z0), (x1, y1, z0), (x1, y1, z1), (x0, y0, z1)]
+        # counter-clockwise corners: (p1 - p0) x (p2 - p0) points inwards for (0, 2, 1)
+        tri += [(base, base + 2, base + 1), (base, base + 3, base + 2)]
+    return np.array(pts, float), np.array(tri, int)
+
+
+@dataclass
+class ExudynShot:
+    """Result of one exudyn shot.
+
+    Attributes
+    ----------
+    sunk, stopped : bool
+    final_position : array (2,)
+    launch_velocity : array (2,)
+        Ball velocity (horizontal) just after the impact.
+    path : array (k, 3)
+        Ball centre every 10 ms: t, x, y.
+    head_speed : array (k, 2)
+        Club-head speed around the impact: t, |v|.
+    simulated_time, wall_time : float
+    """
+
+    sunk: bool
+    stopped: bool
+    final_position: np.ndarray
+    launch_velocity: np.ndarray
+    path: np.ndarray
+    head_speed: np.ndarray
+    simulated_time: float
+    wall_time: float
+    events: list = field(default_factory=list)
+
+    @property
+    def real_time_factor(self) -> float:
+        """Simulated seconds per wall-clock second."""
+        return self.simulated_time / max(self.wall_time, 1e-12)
+
+
+def simulate_shot_exudyn(field: Field, ball_xy, club_velocity, hole=None,
+                         max_time: float = 12.0, step: float = 2e-4,
+                         mesh_spacing: float | None = None, gap: float = 0.01,
+                         restitution: float = RESTITUTION) -> ExudynShot:
+    """One shot in exudyn (module docstring): the club head starts ``gap`` behind the ball
+    moving with ``club_velocity`` (3,) and strikes it; the ball rolls until it drops, stops or
+    the time runs out.
+
+    Raises ``RuntimeError`` naming the time when exudyn's solver fails (never a silently
+    truncated result).
+    """
+    import time
+
+    import exudyn as exu
+    from exudyn.utilities import InertiaSphere, LoadForceVector, MarkerBodyRigid
+
+    ball_xy = np.asarray(field.check_situation(ball_xy)[0], float)
+    hole = field.hole if hole is None else np.asarray(hole, float)
+    vc = np.asarray(club_velocity, float).reshape(3)
+    speed = float(np.linalg.norm(vc[:2]))
+    if not speed > 0:
+        raise ValueError("the club velocity has no horizontal part: the ball is never hit")
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    ground = mbs.CreateGround(referencePosition=[0, 0, 0])
+    m_ground = mbs.AddMarker(MarkerBodyRigid(bodyNumber=ground))
+    gc = mbs.AddGeneralContact()
+    gc.verboseMode = 0
+    # materials: 0 field, 1 ball, 2 club head
+    mu = np.array([[0.0, MU_SLIDE, 0.0], [MU_SLIDE, 0.0, 0.0], [0.0, 0.0, 0.0]])
+    gc.SetFrictionPairings(mu)
+    b = field.bounds
+    gc.SetSearchTreeBox(pMin=[b[0] - 0.1, b[2] - 0.1, -1.0], pMax=[b[1] + 0.1, b[3] + 0.1, 1.0])
+    gc.SetSearchTreeCellSize(numberOfCells=[max(1, int((b[1] - b[0]) / 0.1)),
+                                            max(1, int((b[3] - b[2]) / 0.1)), 1])
+    # contact stiffnesses combine in series, dampings in parallel: ball-field k ~ 4e4 N/m
+    # (ball weight sinks 11 um), head-ball k = 2e5 N/m with the damping of restitution e
+    k_ball = k_head = 4e5
+    k_field = 4.4e4
+    m_eff = BALL_MASS * CLUB_MASS / (BALL_MASS + CLUB_MASS)
+    zeta = -np.log(restitution) / np.sqrt(np.pi**2 + np.log(restitution) ** 2)
+    d_hit = 2 * zeta * np.sqrt(k_ball * k_head / (k_ball + k_head) * m_eff)
+    d_field = 2 * 0.7 * np.sqrt(4e4 * BALL_MASS)
+    gc.sphereSphereContact = True
+    pts, tri = field_mesh(field, mesh_spacing)
+    gc.AddTrianglesRigidBodyBased(rigidBodyMarkerIndex=m_ground, contactStiffness=k_field,
+                                  contactDamping=d_field, frictionMaterialIndex=0,
+                                  pointList=pts.tolist(), triangleList=tri.tolist(),
+                                  staticTriangles=True)
+    if field.boundary == "walls":
+        # wall damping for the field's wall restitution (the same rule as head on ball)
+        e_w = min(max(field.wall_restitution, 1e-3), 0.999)
+        zeta_w = -np.log(e_w) / np.sqrt(np.pi**2 + np.log(e_w) ** 2)
+        wp, wt = _walls(field)
+        gc.AddTrianglesRigidBodyBased(rigidBodyMarkerIndex=m_ground, contactStiffness=k_field,
+                                      contactDamping=2 * zeta_w * np.sqrt(4e4 * BALL_MASS),
+                                      frictionMaterialIndex=0,
+                                      pointList=wp.tolist(), triangleList=wt.tolist(),
+                                      staticTriangles=True)
+    z0 = float(field.surface.height(ball_xy[None])[0])
+    grad = field.surface.gradient(ball_xy[None])[0]
+    nrm = np.array([-grad[0], -grad[1], 1.0]) / np.sqrt(1 + grad @ grad)
+    p_ball = np.array([ball_xy[0], ball_xy[1], z0]) + (BALL_RADIUS + 1e-5) * nrm
+    ball = mbs.CreateRigidBody(inertia=InertiaSphere(BALL_MASS, BALL_RADIUS),
+                               referencePosition=p_ball.tolist(), gravity=[0, 0, -G],
+                               nodeType=exu.NodeType.RotationRotationVector)
+    m_ball = mbs.AddMarker(MarkerBodyRigid(bodyNumber=ball))
+    gc.AddSphereWithMarker(m_ball, radius=BALL_RADIUS, contactStiffness=k_ball,
+                           contactDamping=0.0, frictionMaterialIndex=1)
+    u = vc / np.linalg.norm(vc)
+    # the head meets the ball at the ball's height (the face's contact point), held by the arm
+    # against gravity; it only touches the ball
+    p_head = p_ball - (BALL_RADIUS + HEAD_RADIUS + gap) * u
+    head = mbs.CreateRigidBody(inertia=InertiaSphere(CLUB_MASS, HEAD_RADIUS),
+                               referencePosition=p_head.tolist(),
+                               initialVelocity=vc.tolist(), gravity=[0, 0, 0],
+                               nodeType=exu.NodeType.RotationRotationVector)
+    m_head = mbs.AddMarker(MarkerBodyRigid(bodyNumber=head))
+    gc.AddSphereWithMarker(m_head, radius=HEAD_RADIUS, contactStiffness=k_head,
+                           contactDamping=d_hit, frictionMaterialIndex=2)
+    ball_node = mbs.GetObject(ball)["nodeNumber"]
+    head_node = mbs.GetObject(head)["nodeNumber"]
+    rho, ff = field.rolling_resistance, field.surface.friction_factor
+    state = {"sunk": False, "stopped": False, "slow": 0.0, "launch": None, "contact": False}
+    path, heads = [], []
+
+    surf = field.surface
+    zero = [0.0, 0.0, 0.0]
+    vel_t, pos_t, ang_t = (exu.OutputVariableType.Velocity, exu.OutputVariableType.Position,
+                           exu.OutputVariableType.AngularVelocity)
+
+    def resistance(mbs_, t, load):
+        if state["launch"] is None:
+            return zero
+        vx, vy, vz = mbs_.GetNodeOutput(ball_node, vel_t)
+        s = (vx * vx + vy * vy + vz * vz) ** 0.5
+        if s < 1e-9:
+            return zero
+        # only while rolling (as in the fast model): the contact point, at -r n from the
+        # centre (n the surface normal), hardly slips
+        px, py, _ = mbs_.GetNodeOutput(ball_node, pos_t)
+        if flat:
+            nx = ny = 0.0
+            nz = 1.0
+        else:
+            gx, gy = surf.gradient(np.array([[px, py]]))[0]
+            inv = 1.0 / (1.0 + gx * gx + gy * gy) ** 0.5
+            nx, ny, nz = -gx * inv, -gy * inv, inv
+        wx, wy, wz = mbs_.GetNodeOutput(ball_node, ang_t)
+        r = BALL_RADIUS
+        sx = vx - r * (wy * nz - wz * ny)
+        sy = vy - r * (wz * nx - wx * nz)
+        sz = vz - r * (wx * ny - wy * nx)
+        if sx * sx + sy * sy + sz * sz > (0.02 * s + 0.005) ** 2:
+            return zero
+        fac = 1.0 if ff_const else float(ff(np.array([[px, py]]))[0])
+        f = rho * fac * BALL_MASS * G / s
+        return [-f * vx, -f * vy, -f * vz]
+
+    flat = field.surface.shape == "plane" and not np.any(field.surface.gradient(
+        np.zeros((1, 2))))
+    ff_const = field.surface.shape != "rough"
+    mbs.AddLoad(LoadForceVector(markerNumber=m_ball, loadVector=[0, 0, 0],
+                                loadVectorUserFunction=resistance))
+
+    def head_brake(mbs_, t, load):
+        # after the contact the arm's resting mode stops the club (time constant 20 ms), so
+        # the head does not catch up with the ball again
+        if state["launch"] is None:
+            return [0.0, 0.0, 0.0]
+        vh = np.asarray(mbs_.GetNodeOutput(head_node, exu.OutputVariableType.Velocity))
+        return (-CLUB_MASS / 0.02 * vh).tolist()
+
+    mbs.AddLoad(LoadForceVector(markerNumber=m_head, loadVector=[0, 0, 0],
+                                loadVectorUserFunction=head_brake))
+    R = field.hole_radius
+    t_rec = [0.0]
+
+    def pre_step(mbs_, t):
+        p = np.asarray(mbs_.GetNodeOutput(ball_node, exu.OutputVariableType.Position))
+        v = np.asarray(mbs_.GetNodeOutput(ball_node, exu.OutputVariableType.Velocity))
+        ph = np.asarray(mbs_.GetNodeOutput(head_node, exu.OutputVariableType.Position))
+        vh = np.asarray(mbs_.GetNodeOutput(head_node, exu.OutputVariableType.Velocity))
+        touching = np.linalg.norm(p - ph) < BALL_RADIUS + HEAD_RADIUS
+        if touching:
+            state["contact"] = True
+        elif state["contact"] and state["launch"] is None:
+            state["launch"] = v[:2].copy()
+        if t >= t_rec[0] - 1e-12:
+            path.append((t, p[0], p[1]))
+            t_rec[0] += 0.01
+        if t < 0.1:
+            heads.append((t, float(np.linalg.norm(vh))))
+        if state["launch"] is None:
+            return True
+        off = float(np.linalg.norm(p[:2] - hole))
+        sp = float(np.linalg.norm(v))
+        if off < R and sp < float(_capture_speed(off, R)):
+            state["sunk"] = True
+            return False
+        state["slow"] = state["slow"] + step if sp < STOP_SPEED else 0.0
+        if state["slow"] > 0.05:
+            state["stopped"] = True
+            return False
+        if not (b[0] - 0.05 <= p[0] <= b[1] + 0.05 and b[2] - 0.05 <= p[1] <= b[3] + 0.05):
+            return False
+        return True
+
+    mbs.SetPreStepUserFunction(pre_step)
+    mbs.Assemble()
+    so = exu.SimulationSettings()
+    with warnings.catch_warnings():  # exudyn renamed some settings; the old names still work
+        warnings.simplefilter("ignore", DeprecationWarning)
+        so.timeIntegration.numberOfSteps = int(np.ceil(max_time / step))
+        so.timeIntegration.endTime = max_time
+        so.timeIntegration.explicitIntegration.useLieGroupIntegration = True
+        so.timeIntegration.verboseMode = 0
+        so.solutionSettings.writeSolutionToFile = False
+        so.displayComputationTime = False
+    t0 = time.perf_counter()
+    exu.SetWriteToConsole(False)  # its note on per-step allocations by user functions
+    try:
+        exu.SolveDynamic(mbs, so, solverType=exu.DynamicSolverType.RK44)
+    except Exception as exc:  # noqa: BLE001 - exudyn raises its own error types
+        t_fail = path[-1][0] if path else 0.0
+        raise RuntimeError(f"exudyn failed near t = {t_fail:.3f} s of the shot: {exc}") from None
+    finally:
+        exu.SetWriteToConsole(True)
+    wall = time.perf_counter() - t0
+    p = np.asarray(mbs.GetNodeOutput(ball_node, exu.OutputVariableType.Position))
+    t_end = path[-1][0] if path else 0.0
+    launch = state["launch"] if state["launch"] is not None else np.zeros(2)
+    return ExudynShot(state["sunk"], state["stopped"], p[:2].copy(), launch, np.array(path),
+                      np.array(heads), t_end, wall)
+
+
+VALIDATION_COLUMNS = ("field", "robot", "shot", "sunk_fast", "sunk_exudyn",
+                      "impact_direction_error_deg", "impact_speed_error", "final_distance_m")
+
+
+def validate(robot_name: str = "wam", field_name: str = "flat", shots: int = 10,
+             out: str = "validate_out", seed: int = 0, progress: bool = True) -> list[dict]:
+    """``seds-casadi validate``: shots chosen by the learned hitting-parameter model (GPR on the
+    teacher's data set for the field), executed by the robot's 500 Hz controller on Pinocchio,
+    then played on the fast ball model and in exudyn; writes ``validation.csv``,
+    ``report.txt`` and ``validation.png`` into ``out``.
+
+    Returns the rows of ``validation.csv``.
+    """
+    import os
+    import time
+
+    from ._io import atomic_csv, atomic_text
+    from .ball import impact, simulate_shots
+    from .control import default_base, simulate_swing
+    from .datasets import load_hitting_demos
+    from .fields import load_field
+    from .hitting import make_model
+    from .motion import HittingMotion
+    from .robots import load_robot
+    from .teacher import Stroke, collect_dataset
+
+    if int(shots) < 1:
+        raise ValueError(f"shots must be at least 1, got {shots}")
+    fld = load_field(field_name)
+    os.makedirs(out, exist_ok=True)
+    rng = np.random.default_rng(seed)
+    t0 = time.perf_counter()
+    motion = HittingMotion.fit(load_hitting_demos(), n_components=3)
+    stroke = Stroke.from_motion(motion)
+    data = collect_dataset(fld, stroke, resolution=(121, 41))
+    model = make_model("gpr").fit(data.situations, data.outputs)
+    print(f"hitting motion, teacher ({len(data)} good shots) and GPR: "
+          f"{time.perf_counter() - t0:.1f} s", flush=True)
+
+    def placed(ball_xy):
+        # the robot stands at its default place beside each ball, on the surface
+        base = np.asarray(default_base(robot_name), float)
+        base[:2] += ball_xy
+        base[2] += max(0.0, float(fld.surface.height(base[None, :2])[0]))
+        return load_robot(robot_name, base=tuple(base), field=fld)
+
+    lo, hi = data.hole.min(axis=0), data.hole.max(axis=0)
+    rows, paths = [], []
+    it = range(int(shots))
+    if progress:
+        from tqdm.auto import tqdm
+
+        it = tqdm(it, desc=f"validate {robot_name} on {fld.name}", unit="shot")
+    wall, simulated = 0.0, 0.0
+    for i in it:
+        hole = lo + rng.uniform(size=2) * (hi - lo)
+        ball = data.ball[0] if np.ptp(data.ball, axis=0).max() == 0 else \
+            data.ball.min(axis=0) + rng.uniform(size=2) * np.ptp(data.ball, axis=0)
+        pred = model.predict((hole - ball)[None])[0]
+        alpha = np.deg2rad(pred[0])
+        kappa = float(pred[1]) if len(pred) > 1 else float(data.kappa[0])
+        z = float(fld.surface.height(ball[None])[0]) + BALL_RADIUS
+        swing = simulate_swing(placed(ball), motion, np.array([ball[0], ball[1], z]), alpha,
+                               kappa)
+        row = {"field": fld.name, "robot": robot_name, "shot": i}
+        if not swing.hit:
+            row.update(sunk_fast=False, sunk_exudyn=False, impact_direction_error_deg=np.nan,
+                       impact_speed_error=np.nan, final_distance_m=np.nan)
+            rows.append(row)
+            paths.append(None)
+            continue
+        vc = swing.hit_velocity
+        launch = impact(vc[None])
+        fast = simulate_shots(fld, ball[None], launch, hole=hole, engine="numpy",
+                              record_paths=True)
+        ex = simulate_shot_exudyn(fld, ball, vc, hole=hole)
+        wall += ex.wall_time
+        simulated += ex.simulated_time
+        a, b2 = ex.launch_velocity, launch[0]
+        cosang = a @ b2 / max(np.linalg.norm(a) * np.linalg.norm(b2), 1e-12)
+        row.update(sunk_fast=bool(fast.sunk[0]), sunk_exudyn=bool(ex.sunk),
+                   impact_direction_error_deg=float(np.degrees(np.arccos(np.clip(cosang, -1, 1)))),
+                   impact_speed_error=float(abs(np.linalg.norm(a) / np.linalg.norm(b2) - 1)),
+                   final_distance_m=float(np.linalg.norm(ex.final_position
+                                                         - fast.final_position[0])))
+        rows.append(row)
+        paths.append((fast.paths[0], ex.path[:, 1:], hole, ball, swing, ex))
+    atomic_csv(os.path.join(out, "validation.csv"), VALIDATION_COLUMNS,
+               ([r[c] for c in VALIDATION_COLUMNS] for r in rows))
+    hit = [r for r in rows if np.isfinite(r["impact_speed_error"])]
+    agree = np.mean([r["sunk_fast"] == r["sunk_exudyn"] for r in rows])
+    lines = [f"validation of {robot_name} on {fld.name}: {len(rows)} shots, {len(hit)} hit",
+             f"sinks agree: {agree:.0%} (fast sank {sum(r['sunk_fast'] for r in rows)}, "
+             f"exudyn sank {sum(r['sunk_exudyn'] for r in rows)})"]
+    if hit:
+        lines += [
+            f"impact direction error: max {max(r['impact_direction_error_deg'] for r in hit):.2f}"
+            f" deg (target 2)",
+            f"impact speed error: max {max(r['impact_speed_error'] for r in hit):.1%} "
+            f"(target 10 %)",
+            f"final distance: median {np.median([r['final_distance_m'] for r in hit]):.3f} m, "
+            f"max {max(r['final_distance_m'] for r in hit):.3f} m",
+            f"exudyn speed: {simulated / max(wall, 1e-9):.2f} simulated s per wall s"]
+    text = "\n".join(lines) + "\n"
+    atomic_text(os.path.join(out, "report.txt"), text)
+    _report_figure(fld, paths, os.path.join(out, "validation.png"))
+    print(text, end="")
+    return rows
+
+
+def _report_figure(fld, paths, path):
+    from .plotting import _plt, plot_field, save_figure
+
+    plt = _plt()
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(14, 3.8), gridspec_kw={"width_ratios": [2.2, 1]})
+    plot_field(fld, ax=a1)
+    for k, p in enumerate(paths):
+        if p is None:
+            continue
+        fast, ex, hole, ball, swing, shot = p
+        c = plt.rcParams["axes.prop_cycle"].by_key()["color"][k % 10]
+        a1.plot(fast[:, 0], fast[:, 1], "-", color=c, lw=1)
+        a1.plot(ex[:, 0], ex[:, 1], "--", color=c, lw=1)
+        a1.add_patch(plt.Circle(hole, fld.hole_radius, color=c, fill=False, lw=1))
+        v = np.linalg.norm(np.gradient(swing.head, swing.t, axis=0), axis=1)
+        a2.plot(swing.t - swing.hit_time, v, "-", color=c, lw=1)
+        if len(shot.head_speed):
+            a2.plot(shot.head_speed[:, 0], shot.head_speed[:, 1], ":", color=c, lw=1)
+    a1.set_title("ball paths: fast model (solid), exudyn (dashed)", fontsize=9)
+    a2.set_xlim(-0.3, 0.15)
+    a2.set_xlabel("time from the hit [s]")
+    a2.set_ylabel("club-head speed [m/s]")
+    a2.set_title("club head: robot swing (solid), exudyn head (dotted)", fontsize=9)
+    save_figure(fig, path)
