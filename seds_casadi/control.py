@@ -20,7 +20,7 @@ the ball (from the simulation standing in for the sensors) and computes
    would exceed its limit, the acceleration part is scaled down (gravity is always
    compensated), so the limits hold unless gravity alone exceeds them.
 
-:func:`simulate_swing` integrates the robot's forward dynamics (ABA, semi-implicit Euler with
+:func:`simulate_swing` integrates the robot's forward dynamics (ABA, classical Runge-Kutta with
 sub-steps) under these torques, so tracking, torque limits and the club-head velocity at impact
 are measured rather than assumed.
 """
@@ -213,7 +213,8 @@ class SwingController:
                 lam = -s0 / (s1 - s0)
                 p_hit = p0 + lam * (x - p0)
                 if np.linalg.norm(p_hit - target) <= self.hit_radius:
-                    self.hit = {"t": t, "position": p_hit, "psi": psi.copy(),
+                    self.hit = {"t": t - (1 - lam) * self.period, "lam": lam,
+                                "position": p_hit, "psi": psi.copy(),
                                 "commanded": kappa * self.motion.hitting_speed * psi}
                     # the DS's velocity just before the contact point (past it, the attractor
                     # points back): the resting mode continues it and slows down
@@ -475,7 +476,7 @@ def simulate_swing(robot: Robot, motion: HittingMotion, ball, alpha: float = 0.0
     events = sorted(perturb or [], key=lambda e: e["t"])
     T, Q, QD, TAU, X, TICK = [], [], [], [], [], []
     t, t_end = 0.0, max_time
-    hit_v = None
+    hit_v = v_prev = None
     ei = 0
     while t < t_end - 1e-12:
         while ei < len(events) and events[ei]["t"] <= t + 1e-12:
@@ -490,10 +491,14 @@ def simulate_swing(robot: Robot, motion: HittingMotion, ball, alpha: float = 0.0
         t0 = time.perf_counter_ns()
         tau = ctl.tick(q, qd, ball, alpha, kappa, t)
         TICK.append(time.perf_counter_ns() - t0)
+        v_now = robot.head_jacobian(q)[:3] @ qd
         if not had_hit and ctl.hit is not None:
-            J = robot.head_jacobian(q)
-            hit_v = J[:3] @ qd
+            # the velocity at the crossing of the contact plane, interpolated between this
+            # tick and the previous one (near the ball the direction turns quickly)
+            lam = float(ctl.hit["lam"])
+            hit_v = v_now if v_prev is None else v_prev + lam * (v_now - v_prev)
             t_end = t + rest_time
+        v_prev = v_now
         x, _ = robot.head_pose(q)
         T.append(t)
         Q.append(q.copy())
@@ -501,9 +506,14 @@ def simulate_swing(robot: Robot, motion: HittingMotion, ball, alpha: float = 0.0
         TAU.append(tau.copy())
         X.append(x)
         for _ in range(int(substeps)):
-            qdd = pin.aba(robot.model, robot.data, q, qd, tau)
-            qd = qd + h * qdd
-            q = q + h * qd
+            # classical RK4 on (q, qd) with the torque held over the period
+            m, d = robot.model, robot.data
+            a1 = pin.aba(m, d, q, qd, tau)
+            a2 = pin.aba(m, d, q + 0.5 * h * qd, qd + 0.5 * h * a1, tau)
+            a3 = pin.aba(m, d, q + 0.5 * h * (qd + 0.5 * h * a1), qd + 0.5 * h * a2, tau)
+            a4 = pin.aba(m, d, q + h * (qd + 0.5 * h * a2), qd + h * a3, tau)
+            q = q + h * qd + h * h / 6 * (a1 + a2 + a3)
+            qd = qd + h / 6 * (a1 + 2 * a2 + 2 * a3 + a4)
         t += period
     tau_arr = np.array(TAU)
     Q = np.array(Q)

@@ -1,27 +1,33 @@
-"""Validation in exudyn: a club head striking a ball that rolls on the field's triangle mesh.
+"""Validation in exudyn: the arm, its club and a ball rolling on the field's triangle mesh.
 
-The independent judge of the fast ball model (:mod:`seds_casadi.ball`): the same shot is
-simulated as a multibody system with contact, and the two are compared.
+The independent judge of the robot simulation (:mod:`seds_casadi.control`) and of the fast ball
+model (:mod:`seds_casadi.ball`): the same shot is simulated as a multibody system with contact,
+and the two are compared (``seds-casadi validate``).
 
+* **Arm**: an exudyn ``ObjectKinematicTree`` converted from the robot's Pinocchio model (same
+  joint placements, masses, centres of mass, inertias, club included; free fall matches
+  Pinocchio's ABA to 1e-13 rad), driven by the same :class:`~seds_casadi.control.SwingController`
+  from a pre-step function: torques every 2 ms from exudyn's joint state, not prescribed motion.
+* **Club face**: a flat 4 x 4 cm square (two contact triangles) on the club's link at the
+  ``club_head`` frame, normal along the face normal: the ball leaves along the face's normal
+  with whatever the arm's inertia and the controller give, not the fast model's formula.
+  Face-ball contact damping is set for a restitution of 0.8.
 * **Field**: a triangle mesh of z = H(x, y) (:func:`field_mesh`, normals up), plus vertical wall
-  strips on fields with walls. Ball-field contact is exudyn's sphere-triangle contact with
-  Coulomb friction (mu = 0.2: the skid after the impact and its turn into rolling come out of
-  the contact, not from the fast model's formula).
+  strips (damped for the field's wall restitution) on fields with walls. Ball-field contact is
+  exudyn's sphere-triangle contact with Coulomb friction (mu = 0.2): the skid after the impact
+  and its turn into rolling come out of the contact.
 * **Rolling resistance**: exudyn's contact has Coulomb friction only, so a force rho m g (times
   the field's local friction factor) against the ball's velocity acts at its centre while it
-  rolls; on a rolling ball it decelerates it by (5/7) rho g, as in the fast model.
+  rolls (contact point not slipping); on a rolling ball it decelerates it by (5/7) rho g.
 * **Ball**: a rigid sphere (46 g, radius 21.35 mm, solid-sphere inertia 2/5 m r^2).
-* **Club head**: a rigid sphere of the impact model's effective mass (0.35 kg) launched with the
-  club-head velocity measured at the hit (from the robot simulation), its contact with the ball a
-  spring-damper whose damping gives the restitution 0.8 of the impact model. After the contact
-  the head is braked (time constant 20 ms), standing in for the arm's resting mode, so that it
-  does not catch up with the ball (there is no arm behind it yet: the arm as an exudyn
-  kinematic tree is the next step).
 * **Hole**: a capture region: the ball drops when its centre is over the hole and its speed is
   below the capture speed for its offset (the fast model's chord criterion).
+* Without an arm (``simulate_shot_exudyn(field, ball, club_velocity)``), a free club-head
+  sphere of the impact model's effective mass (0.35 kg) strikes the ball, braked after the
+  contact: a check of the impact and rolling models alone.
 
 Integration: explicit 4th-order Runge-Kutta with Lie-group rotations, step 0.2 ms (14 steps per
-period of the stiffest contact, head on ball).
+period of the stiffest contact, face on ball).
 """
 
 from __future__ import annotations
@@ -123,13 +129,20 @@ class ExudynShot:
         return self.simulated_time / max(self.wall_time, 1e-12)
 
 
-def simulate_shot_exudyn(field: Field, ball_xy, club_velocity, hole=None,
+def simulate_shot_exudyn(field: Field, ball_xy, club_velocity=None, hole=None,
                          max_time: float = 12.0, step: float = 2e-4,
                          mesh_spacing: float | None = None, gap: float = 0.01,
-                         restitution: float = RESTITUTION) -> ExudynShot:
-    """One shot in exudyn (module docstring): the club head starts ``gap`` behind the ball
-    moving with ``club_velocity`` (3,) and strikes it; the ball rolls until it drops, stops or
-    the time runs out.
+                         restitution: float = RESTITUTION, arm: dict | None = None
+                         ) -> ExudynShot:
+    """One shot in exudyn (module docstring); the ball rolls until it drops, stops or the time
+    runs out.
+
+    Without ``arm``: a free club head of the impact model's effective mass starts ``gap``
+    behind the ball moving with ``club_velocity`` (3,). With ``arm`` (a dict with ``robot``,
+    ``motion``, ``alpha``, ``kappa`` and optionally ``gains``): the robot is an exudyn
+    kinematic tree converted from its Pinocchio model, driven by :class:`SwingController`'s
+    torques every 2 ms from exudyn's joint state, and the ball is struck by a contact sphere at
+    the club face on its last link: the impact then involves the whole arm, not a formula.
 
     Raises ``RuntimeError`` naming the time when exudyn's solver fails (never a silently
     truncated result).
@@ -141,10 +154,10 @@ def simulate_shot_exudyn(field: Field, ball_xy, club_velocity, hole=None,
 
     ball_xy = np.asarray(field.check_situation(ball_xy)[0], float)
     hole = field.hole if hole is None else np.asarray(hole, float)
-    vc = np.asarray(club_velocity, float).reshape(3)
-    speed = float(np.linalg.norm(vc[:2]))
-    if not speed > 0:
-        raise ValueError("the club velocity has no horizontal part: the ball is never hit")
+    if arm is None:
+        vc = np.asarray(club_velocity, float).reshape(3)
+        if not float(np.linalg.norm(vc[:2])) > 0:
+            raise ValueError("the club velocity has no horizontal part: the ball is never hit")
     SC = exu.SystemContainer()
     mbs = SC.AddSystem()
     ground = mbs.CreateGround(referencePosition=[0, 0, 0])
@@ -192,27 +205,37 @@ def simulate_shot_exudyn(field: Field, ball_xy, club_velocity, hole=None,
     m_ball = mbs.AddMarker(MarkerBodyRigid(bodyNumber=ball))
     gc.AddSphereWithMarker(m_ball, radius=BALL_RADIUS, contactStiffness=k_ball,
                            contactDamping=0.0, frictionMaterialIndex=1)
-    u = vc / np.linalg.norm(vc)
-    # the head meets the ball at the ball's height (the face's contact point), held by the arm
-    # against gravity; it only touches the ball
-    p_head = p_ball - (BALL_RADIUS + HEAD_RADIUS + gap) * u
-    head = mbs.CreateRigidBody(inertia=InertiaSphere(CLUB_MASS, HEAD_RADIUS),
-                               referencePosition=p_head.tolist(),
-                               initialVelocity=vc.tolist(), gravity=[0, 0, 0],
-                               nodeType=exu.NodeType.RotationRotationVector)
-    m_head = mbs.AddMarker(MarkerBodyRigid(bodyNumber=head))
-    gc.AddSphereWithMarker(m_head, radius=HEAD_RADIUS, contactStiffness=k_head,
-                           contactDamping=d_hit, frictionMaterialIndex=2)
+    if arm is None:
+        u = vc / np.linalg.norm(vc)
+        # the head meets the ball at the ball's height (the face's contact point), held by
+        # the arm against gravity; it only touches the ball
+        p_head = p_ball - (BALL_RADIUS + HEAD_RADIUS + gap) * u
+        head = mbs.CreateRigidBody(inertia=InertiaSphere(CLUB_MASS, HEAD_RADIUS),
+                                   referencePosition=p_head.tolist(),
+                                   initialVelocity=vc.tolist(), gravity=[0, 0, 0],
+                                   nodeType=exu.NodeType.RotationRotationVector)
+        m_head = mbs.AddMarker(MarkerBodyRigid(bodyNumber=head))
+        head_node = mbs.GetObject(head)["nodeNumber"]
+        arm_state = None
+        gc.AddSphereWithMarker(m_head, radius=HEAD_RADIUS, contactStiffness=k_head,
+                               contactDamping=d_hit, frictionMaterialIndex=2)
+    else:
+        m_head, head_node, arm_state = _add_arm(mbs, arm, p_ball)
+        # a flat putter face (4 x 4 cm, two triangles) on the club's link: the ball leaves
+        # along the face's normal, as from a real putter
+        gc.AddTrianglesRigidBodyBased(rigidBodyMarkerIndex=m_head, contactStiffness=k_head,
+                                      contactDamping=d_hit, frictionMaterialIndex=2,
+                                      pointList=arm_state["face_points"],
+                                      triangleList=[[0, 1, 2], [0, 2, 3]])
     ball_node = mbs.GetObject(ball)["nodeNumber"]
-    head_node = mbs.GetObject(head)["nodeNumber"]
     rho, ff = field.rolling_resistance, field.surface.friction_factor
     state = {"sunk": False, "stopped": False, "slow": 0.0, "launch": None, "contact": False}
+    vel_t, pos_t = exu.OutputVariableType.Velocity, exu.OutputVariableType.Position
     path, heads = [], []
 
     surf = field.surface
     zero = [0.0, 0.0, 0.0]
-    vel_t, pos_t, ang_t = (exu.OutputVariableType.Velocity, exu.OutputVariableType.Position,
-                           exu.OutputVariableType.AngularVelocity)
+    ang_t = exu.OutputVariableType.AngularVelocity
 
     def resistance(mbs_, t, load):
         if state["launch"] is None:
@@ -256,27 +279,43 @@ def simulate_shot_exudyn(field: Field, ball_xy, club_velocity, hole=None,
         vh = np.asarray(mbs_.GetNodeOutput(head_node, exu.OutputVariableType.Velocity))
         return (-CLUB_MASS / 0.02 * vh).tolist()
 
-    mbs.AddLoad(LoadForceVector(markerNumber=m_head, loadVector=[0, 0, 0],
-                                loadVectorUserFunction=head_brake))
+    if arm_state is None:
+        mbs.AddLoad(LoadForceVector(markerNumber=m_head, loadVector=[0, 0, 0],
+                                    loadVectorUserFunction=head_brake))
+
+    def head_state(mbs_):
+        if arm_state is None:
+            return (np.asarray(mbs_.GetNodeOutput(head_node, pos_t)),
+                    np.asarray(mbs_.GetNodeOutput(head_node, vel_t)))
+        return arm_state["head"](mbs_)
     R = field.hole_radius
     t_rec = [0.0]
 
     def pre_step(mbs_, t):
+        if arm_state is not None:
+            arm_state["control"](mbs_, t)
         p = np.asarray(mbs_.GetNodeOutput(ball_node, exu.OutputVariableType.Position))
         v = np.asarray(mbs_.GetNodeOutput(ball_node, exu.OutputVariableType.Velocity))
-        ph = np.asarray(mbs_.GetNodeOutput(head_node, exu.OutputVariableType.Position))
-        vh = np.asarray(mbs_.GetNodeOutput(head_node, exu.OutputVariableType.Velocity))
-        touching = np.linalg.norm(p - ph) < BALL_RADIUS + HEAD_RADIUS
+        ph, vh = head_state(mbs_)
+        if arm_state is None:
+            touching = np.linalg.norm(p - ph) < BALL_RADIUS + HEAD_RADIUS
+        else:
+            touching = float((p - ph) @ arm_state["normal"](mbs_)) < BALL_RADIUS
         if touching:
+            if not state["contact"]:
+                state["head_velocity"] = vh.copy()
+                state["contact_time"] = t
             state["contact"] = True
         elif state["contact"] and state["launch"] is None:
             state["launch"] = v[:2].copy()
         if t >= t_rec[0] - 1e-12:
             path.append((t, p[0], p[1]))
             t_rec[0] += 0.01
-        if t < 0.1:
+        if (arm_state is not None and state["launch"] is None) or t < 0.1:
             heads.append((t, float(np.linalg.norm(vh))))
         if state["launch"] is None:
+            if arm_state is not None and t > arm_state["give_up"]:
+                return False  # the swing never reached the ball: a miss, not a crash
             return True
         off = float(np.linalg.norm(p[:2] - hole))
         sp = float(np.linalg.norm(v))
@@ -315,8 +354,12 @@ def simulate_shot_exudyn(field: Field, ball_xy, club_velocity, hole=None,
     p = np.asarray(mbs.GetNodeOutput(ball_node, exu.OutputVariableType.Position))
     t_end = path[-1][0] if path else 0.0
     launch = state["launch"] if state["launch"] is not None else np.zeros(2)
-    return ExudynShot(state["sunk"], state["stopped"], p[:2].copy(), launch, np.array(path),
+    shot = ExudynShot(state["sunk"], state["stopped"], p[:2].copy(), launch, np.array(path),
                       np.array(heads), t_end, wall)
+    shot.hit = state["launch"] is not None
+    shot.head_velocity = state.get("head_velocity", np.full(3, np.nan))
+    shot.contact_time = state.get("contact_time", np.nan)
+    return shot
 
 
 VALIDATION_COLUMNS = ("field", "robot", "shot", "sunk_fast", "sunk_exudyn",
@@ -394,7 +437,17 @@ def validate(robot_name: str = "wam", field_name: str = "flat", shots: int = 10,
         launch = impact(vc[None])
         fast = simulate_shots(fld, ball[None], launch, hole=hole, engine="numpy",
                               record_paths=True)
-        ex = simulate_shot_exudyn(fld, ball, vc, hole=hole)
+        # the same swing in exudyn: the arm as a kinematic tree under the same controller,
+        # the ball struck by the club face's contact sphere
+        ex = simulate_shot_exudyn(fld, ball, hole=hole, arm={
+            "robot": placed(ball), "motion": motion, "alpha": alpha, "kappa": kappa})
+        if not ex.hit:
+            row.update(sunk_fast=bool(fast.sunk[0]), sunk_exudyn=False,
+                       impact_direction_error_deg=np.nan, impact_speed_error=np.nan,
+                       final_distance_m=np.nan)
+            rows.append(row)
+            paths.append(None)
+            continue
         wall += ex.wall_time
         simulated += ex.simulated_time
         a, b2 = ex.launch_velocity, launch[0]
@@ -446,10 +499,155 @@ def _report_figure(fld, paths, path):
         v = np.linalg.norm(np.gradient(swing.head, swing.t, axis=0), axis=1)
         a2.plot(swing.t - swing.hit_time, v, "-", color=c, lw=1)
         if len(shot.head_speed):
-            a2.plot(shot.head_speed[:, 0], shot.head_speed[:, 1], ":", color=c, lw=1)
+            a2.plot(shot.head_speed[:, 0] - shot.contact_time, shot.head_speed[:, 1], ":",
+                    color=c, lw=1.2)
     a1.set_title("ball paths: fast model (solid), exudyn (dashed)", fontsize=9)
     a2.set_xlim(-0.3, 0.15)
     a2.set_xlabel("time from the hit [s]")
     a2.set_ylabel("club-head speed [m/s]")
-    a2.set_title("club head: robot swing (solid), exudyn head (dotted)", fontsize=9)
+    a2.set_title("club-head speed: Pinocchio swing (solid), exudyn arm (dotted)", fontsize=9)
     save_figure(fig, path)
+
+
+# ---------------------------------------------------------------------------- the arm in exudyn
+_JOINT_TYPES = {"JointModelRX": "RevoluteX", "JointModelRY": "RevoluteY",
+                "JointModelRZ": "RevoluteZ", "JointModelPX": "PrismaticX",
+                "JointModelPY": "PrismaticY", "JointModelPZ": "PrismaticZ"}
+
+
+def add_kinematic_tree(mbs, robot, q0=None, qd0=None, gravity=(0.0, 0.0, -G)):
+    """Add the robot as an exudyn ``ObjectKinematicTree`` converted from its Pinocchio model
+    (same joint placements, masses, centres of mass and inertias, including the club), placed
+    at the robot's base on the field. Returns (object index, node index).
+    """
+    import exudyn as exu
+    from exudyn.utilities import NodeGenericODE2, ObjectKinematicTree
+
+    model = robot.model
+    n = model.nv
+    types, parents, rots, offs, inertias, coms, masses = [], [], [], [], [], [], []
+    Mb = robot.base_placement
+    for j in range(1, model.njoints):
+        short = model.joints[j].shortname()
+        if short not in _JOINT_TYPES:
+            raise ValueError(f"{robot.name}: joint {model.names[j]!r} ({short}) has no exudyn "
+                             f"kinematic-tree counterpart (only joints about x, y or z)")
+        types.append(getattr(exu.JointType, _JOINT_TYPES[short]))
+        parent = model.parents[j]
+        M = model.jointPlacements[j]
+        if parent == 0:
+            M = Mb * M  # the base's placement on the field goes into the root joints
+        parents.append(parent - 1)
+        rots.append(M.rotation.copy())
+        offs.append(M.translation.copy())
+        inert = model.inertias[j]
+        masses.append(float(inert.mass))
+        coms.append(np.array(inert.lever))
+        inertias.append(np.array(inert.inertia))
+    q0 = robot.q_home if q0 is None else np.asarray(q0, float)
+    qd0 = np.zeros(n) if qd0 is None else np.asarray(qd0, float)
+    node = mbs.AddNode(NodeGenericODE2(referenceCoordinates=[0.0] * n,
+                                       initialCoordinates=list(q0),
+                                       initialCoordinates_t=list(qd0),
+                                       numberOfODE2Coordinates=n))
+    obj = mbs.AddObject(ObjectKinematicTree(
+        nodeNumber=node, jointTypes=types, linkParents=parents,
+        jointTransformations=exu.Matrix3DList(rots), jointOffsets=exu.Vector3DList(offs),
+        linkInertiasCOM=exu.Matrix3DList(inertias), linkCOMs=exu.Vector3DList(coms),
+        linkMasses=masses,
+        baseOffset=[0.0, 0.0, 0.0], gravity=list(gravity), jointForceVector=[0.0] * n))
+    return obj, node
+
+
+def free_fall(robot, q0, duration: float = 0.3, step: float = 1e-4) -> tuple[np.ndarray, ...]:
+    """The arm falling under gravity with zero torques, in exudyn and in Pinocchio (RK4 on
+    ABA with the same step): returns (q_exudyn, q_pinocchio) at ``duration``."""
+    import exudyn as exu
+    import pinocchio as pin
+
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    _, node = add_kinematic_tree(mbs, robot, q0)
+    mbs.Assemble()
+    so = exu.SimulationSettings()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)
+        so.timeIntegration.numberOfSteps = int(round(duration / step))
+        so.timeIntegration.endTime = duration
+        so.timeIntegration.verboseMode = 0
+        so.solutionSettings.writeSolutionToFile = False
+    exu.SolveDynamic(mbs, so, solverType=exu.DynamicSolverType.RK44)
+    q_ex = np.asarray(mbs.GetNodeOutput(node, exu.OutputVariableType.Coordinates))
+    # the same system in Pinocchio, RK4 on (q, qd)
+    m, d = robot.model, robot.data
+    tau = np.zeros(m.nv)
+
+    def f(x):
+        q, qd = x[:m.nv], x[m.nv:]
+        return np.concatenate([qd, pin.aba(m, d, q, qd, tau)])
+
+    x = np.concatenate([np.asarray(q0, float), np.zeros(m.nv)])
+    for _ in range(int(round(duration / step))):
+        k1 = f(x)
+        k2 = f(x + 0.5 * step * k1)
+        k3 = f(x + 0.5 * step * k2)
+        k4 = f(x + step * k3)
+        x = x + step / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+    return q_ex, x[:m.nv]
+
+
+def _add_arm(mbs, arm: dict, p_ball: np.ndarray):
+    """The robot as a kinematic tree with the controller in a pre-step function; returns the
+    club-head contact marker, None (no head node) and the callbacks used by the shot."""
+    import exudyn as exu
+    from exudyn.utilities import MarkerKinematicTreeRigid
+
+    from .control import SwingController, place_head
+    from .motion import rotation_z
+
+    robot, motion = arm["robot"], arm["motion"]
+    alpha, kappa = float(arm["alpha"]), float(arm["kappa"])
+    ctl = SwingController(robot, motion, gains=arm.get("gains"))
+    start = rotation_z(alpha) @ np.array([-0.3, 0.0, 0.05])
+    psi = rotation_z(alpha) @ motion.hitting_direction
+    q0 = place_head(robot, ctl.contact_point(p_ball, alpha) + start, psi)
+    ctl.reset(q0)
+    obj, node = add_kinematic_tree(mbs, robot, q0)
+    # the club face on the club's link: a square around the face's contact point in the
+    # plane of the head frame's y and z axes, its normal the head frame's x axis
+    fr = robot.model.frames[robot.head_frame]
+    marker = mbs.AddMarker(MarkerKinematicTreeRigid(objectNumber=obj,
+                                                    linkNumber=fr.parentJoint - 1,
+                                                    localPosition=[0.0, 0.0, 0.0]))
+    c, Rf = fr.placement.translation, fr.placement.rotation
+    a = 0.02
+    # corners counter-clockwise seen from the ball (normal +x): (p1-p0) x (p2-p0) along +x
+    face = [c + a * (sy * Rf[:, 1] + sz * Rf[:, 2])
+            for sy, sz in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
+    coords, coords_t = exu.OutputVariableType.Coordinates, exu.OutputVariableType.Coordinates_t
+    nxt = [0.0]
+    ball = p_ball.copy()
+
+    def control(mbs_, t):
+        if t + 1e-12 >= nxt[0]:
+            q = np.asarray(mbs_.GetNodeOutput(node, coords))
+            qd = np.asarray(mbs_.GetNodeOutput(node, coords_t))
+            tau = ctl.tick(q, qd, ball, alpha, kappa, t)
+            mbs_.SetObjectParameter(obj, "jointForceVector", tau.tolist())
+            nxt[0] += ctl.period
+
+    def head(mbs_):
+        import pinocchio as pin
+
+        q = np.asarray(mbs_.GetNodeOutput(node, coords))
+        qd = np.asarray(mbs_.GetNodeOutput(node, coords_t))
+        x, R = robot.head_pose(q)
+        v = robot.head_jacobian(q)[:3] @ qd
+        del pin
+        return x, v
+
+    def normal(mbs_):
+        return robot.head_pose(np.asarray(mbs_.GetNodeOutput(node, coords)))[1][:, 0]
+
+    return marker, None, {"control": control, "head": head, "normal": normal, "give_up": 3.0,
+                          "face_points": [list(map(float, f)) for f in face]}

@@ -11,7 +11,12 @@ import pytest
 from seds_casadi.ball import impact, simulate_shots
 from seds_casadi.fields import Field, load_field
 from seds_casadi.teacher import Stroke, Teacher
-from seds_casadi.validation import VALIDATION_COLUMNS, field_mesh, simulate_shot_exudyn
+from seds_casadi.validation import (
+    VALIDATION_COLUMNS,
+    field_mesh,
+    free_fall,
+    simulate_shot_exudyn,
+)
 
 pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
 STROKE = Stroke(np.array([0.995, 0.097, -0.003]), 0.99)
@@ -63,6 +68,44 @@ def test_double_hill_shot_follows_the_fast_model():
     fast = simulate_shots(f, [[0.1, 0.0]], impact(vc[None]), engine="numpy")
     ex = simulate_shot_exudyn(f, [0.1, 0.0], vc)
     assert np.linalg.norm(ex.final_position - fast.final_position[0]) < 0.1
+
+
+@pytest.mark.parametrize("name", ["wam", "katana", "panda"])
+def test_kinematic_tree_falls_like_pinocchio(name):
+    from seds_casadi.robots import load_robot
+
+    r = load_robot(name, base=(0.2, 0.5, 0.1, -1.0))
+    q0 = r.q_home + 0.1
+    q_ex, q_pin = free_fall(r, q0, duration=0.2)
+    assert np.abs(q_ex - q0).max() > 0.05  # it does fall
+    np.testing.assert_allclose(q_ex, q_pin, atol=1e-9)
+
+
+def test_the_arm_in_exudyn_hits_like_the_pinocchio_swing():
+    from seds_casadi.control import default_base, simulate_swing
+    from seds_casadi.datasets import load_hitting_demos
+    from seds_casadi.motion import HittingMotion
+    from seds_casadi.robots import load_robot
+
+    motion = HittingMotion.fit(load_hitting_demos(), n_components=3)
+    f = load_field("flat")
+    ball = np.array([0.1, 0.0])
+    base = np.array(default_base("wam"))
+    base[:2] += ball
+    robot = load_robot("wam", base=tuple(base))
+    stroke = Stroke.from_motion(motion)
+    alpha, kappa = Teacher(f, stroke, resolution=(121, 41)).good_shot(ball, f.hole)
+    sw = simulate_swing(robot, motion, np.array([0.1, 0.0, 0.02135]), alpha, kappa)
+    ex = simulate_shot_exudyn(f, ball, arm={"robot": robot, "motion": motion, "alpha": alpha,
+                                            "kappa": kappa})
+    assert ex.hit and ex.sunk
+    cos = ex.head_velocity @ sw.hit_velocity / (np.linalg.norm(ex.head_velocity)
+                                                * np.linalg.norm(sw.hit_velocity))
+    assert np.degrees(np.arccos(min(cos, 1.0))) < 0.5
+    assert np.linalg.norm(ex.head_velocity) == pytest.approx(np.linalg.norm(sw.hit_velocity),
+                                                             rel=0.03)
+    fast = simulate_shots(f, ball[None], impact(sw.hit_velocity[None]), engine="numpy")
+    assert fast.sunk[0]
 
 
 def test_mesh_and_bad_input():
