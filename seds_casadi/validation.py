@@ -284,39 +284,41 @@ def simulate_shot_exudyn(field: Field, ball_xy, club_velocity=None, hole=None,
                                     loadVectorUserFunction=head_brake))
 
     def head_state(mbs_):
+        """Club-head point, velocity and face normal (None for the free sphere)."""
         if arm_state is None:
             return (np.asarray(mbs_.GetNodeOutput(head_node, pos_t)),
-                    np.asarray(mbs_.GetNodeOutput(head_node, vel_t)))
+                    np.asarray(mbs_.GetNodeOutput(head_node, vel_t)), None)
         return arm_state["head"](mbs_)
     R = field.hole_radius
     t_rec = [0.0]
 
     def pre_step(mbs_, t):
-        if arm_state is not None:
-            arm_state["control"](mbs_, t)
-        p = np.asarray(mbs_.GetNodeOutput(ball_node, exu.OutputVariableType.Position))
-        v = np.asarray(mbs_.GetNodeOutput(ball_node, exu.OutputVariableType.Velocity))
-        ph, vh = head_state(mbs_)
-        if arm_state is None:
-            touching = np.linalg.norm(p - ph) < BALL_RADIUS + HEAD_RADIUS
-        else:
-            touching = float((p - ph) @ arm_state["normal"](mbs_)) < BALL_RADIUS
-        if touching:
-            if not state["contact"]:
-                state["head_velocity"] = vh.copy()
-                state["contact_time"] = t
-            state["contact"] = True
-        elif state["contact"] and state["launch"] is None:
-            state["launch"] = v[:2].copy()
+        if arm_state is not None and t < state.get("contact_time", np.inf) + 0.5:
+            arm_state["control"](mbs_, t)  # the swing, then the resting mode for 0.5 s
+        p = mbs_.GetNodeOutput(ball_node, pos_t)
+        v = mbs_.GetNodeOutput(ball_node, vel_t)
+        if state["launch"] is None:
+            # the head is needed only until the ball leaves the club
+            ph, vh, nrm = head_state(mbs_)
+            d = np.asarray(p) - ph
+            touching = (d @ d < (BALL_RADIUS + HEAD_RADIUS) ** 2 if nrm is None
+                        else float(d @ nrm) < BALL_RADIUS)
+            if touching:
+                if not state["contact"]:
+                    state["head_velocity"] = vh.copy()
+                    state["contact_time"] = t
+                state["contact"] = True
+            elif state["contact"]:
+                state["launch"] = np.array(v[:2])
+            heads.append((t, float(np.linalg.norm(vh))))
         if t >= t_rec[0] - 1e-12:
             path.append((t, p[0], p[1]))
             t_rec[0] += 0.01
-        if (arm_state is not None and state["launch"] is None) or t < 0.1:
-            heads.append((t, float(np.linalg.norm(vh))))
         if state["launch"] is None:
             if arm_state is not None and t > arm_state["give_up"]:
                 return False  # the swing never reached the ball: a miss, not a crash
             return True
+        p, v = np.asarray(p), np.asarray(v)
         off = float(np.linalg.norm(p[:2] - hole))
         sp = float(np.linalg.norm(v))
         if off < R and sp < float(_capture_speed(off, R)):
@@ -641,13 +643,13 @@ def _add_arm(mbs, arm: dict, p_ball: np.ndarray):
 
         q = np.asarray(mbs_.GetNodeOutput(node, coords))
         qd = np.asarray(mbs_.GetNodeOutput(node, coords_t))
-        x, R = robot.head_pose(q)
-        v = robot.head_jacobian(q)[:3] @ qd
-        del pin
-        return x, v
+        pin.computeJointJacobians(robot.model, robot.data, q)
+        pin.updateFramePlacements(robot.model, robot.data)
+        M = robot.base_placement * robot.data.oMf[robot.head_frame]
+        J = pin.getFrameJacobian(robot.model, robot.data, robot.head_frame,
+                                 pin.LOCAL_WORLD_ALIGNED)
+        v = robot.base_placement.rotation @ (J[:3] @ qd)
+        return M.translation.copy(), v, M.rotation[:, 0].copy()
 
-    def normal(mbs_):
-        return robot.head_pose(np.asarray(mbs_.GetNodeOutput(node, coords)))[1][:, 0]
-
-    return marker, None, {"control": control, "head": head, "normal": normal, "give_up": 3.0,
+    return marker, None, {"control": control, "head": head, "give_up": 3.0,
                           "face_points": [list(map(float, f)) for f in face]}

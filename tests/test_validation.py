@@ -106,6 +106,10 @@ def test_the_arm_in_exudyn_hits_like_the_pinocchio_swing():
                                                              rel=0.03)
     fast = simulate_shots(f, ball[None], impact(sw.hit_velocity[None]), engine="numpy")
     assert fast.sunk[0]
+    # a swing far too slow to reach the ball in time is reported as a miss, not a crash
+    slow = simulate_shot_exudyn(f, ball, max_time=3.5, arm={
+        "robot": robot, "motion": motion, "alpha": alpha, "kappa": 0.03})
+    assert not slow.hit and not slow.sunk
 
 
 def test_mesh_and_bad_input():
