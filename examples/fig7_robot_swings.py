@@ -33,8 +33,8 @@ HOLE_X = 2.4
 offsets = [0.0, -0.18] if args.quick else [0.0, -0.06, -0.12, -0.18]
 holes = [-0.3, 0.3] if args.quick else [-0.3, 0.0, 0.3]
 fig = plt.figure(figsize=(12, 11))
-print(f"{'robot':<7} {'case':<22} {'alpha deg':>9} {'dir err deg':>11} {'speed err':>9} "
-      f"{'peak tau':>8}")
+print(f"{'robot':<7} {'case':<22} {'alpha deg':>9} {'dir err deg':>11} {'face err deg':>12} "
+      f"{'speed err':>9} {'peak tau':>8}")
 for col, (name, kappa) in enumerate((("wam", 1.0), ("katana", 0.4))):
     robot = load_robot(name, base=default_base(name))
     ax3d = fig.add_subplot(2, 2, 1 + col, projection="3d")
@@ -51,7 +51,8 @@ for col, (name, kappa) in enumerate((("wam", 1.0), ("katana", 0.4))):
                           - np.arctan2(psi[1], psi[0]))
             res = simulate_swing(robot, motion, ball, alpha, kappa)
             print(f"{name:<7} {label:<22} {np.degrees(alpha):9.2f} "
-                  f"{res.direction_error_deg:11.2f} {res.speed_error:9.1%} "
+                  f"{res.direction_error_deg:11.2f} {res.face_error_deg:12.2f} "
+                  f"{res.speed_error:9.1%} "
                   f"{res.peak_torque_ratio:8.2f}")
             ax.plot(res.head[:, 0], res.head[:, 1], "-", lw=1, label=label[:12])
             ax.plot(ball[0], ball[1], "o", color="w", mec="k", ms=6)

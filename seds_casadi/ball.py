@@ -56,17 +56,27 @@ STOP_SPEED = 0.005
 
 
 def impact(club_velocity, club_mass: float = CLUB_MASS, restitution: float = RESTITUTION,
-           ball_mass: float = BALL_MASS) -> np.ndarray:
+           ball_mass: float = BALL_MASS, face_normal=None) -> np.ndarray:
     """Ball launch velocity from the club-head velocity (horizontal part), shape (n, 2) or (2,).
 
-    v_ball = (1 + e) m_c / (m_c + m_b) v_club (a central impact along the club's velocity).
+    v_ball = (1 + e) m_c / (m_c + m_b) v_club: a central impact with a square face (its normal
+    along the club's velocity). With ``face_normal`` (n, 3) or (3,), a frictionless flat face at
+    any angle: only the velocity's component along the normal is passed on, and the ball leaves
+    along the normal, v_ball = (1 + e) m_c / (m_c + m_b) (v_club . n) n.
     """
     v = np.asarray(club_velocity, dtype=float)
-    if v.shape[-1] == 3:
-        v = v[..., :2]
     if not (club_mass > 0 and ball_mass > 0 and 0 <= restitution <= 1):
         raise ValueError("masses must be positive and the restitution in [0, 1]")
-    return (1 + restitution) * club_mass / (club_mass + ball_mass) * v
+    k = (1 + restitution) * club_mass / (club_mass + ball_mass)
+    if face_normal is not None:
+        n = np.asarray(face_normal, dtype=float)
+        if v.shape[-1] != 3 or n.shape[-1] != 3:
+            raise ValueError("with face_normal, give 3-D club velocities and normals")
+        n = n / np.linalg.norm(n, axis=-1, keepdims=True)
+        v = np.sum(v * n, axis=-1, keepdims=True) * n
+    if v.shape[-1] == 3:
+        v = v[..., :2]
+    return k * v
 
 
 def capture_speed(offset, hole_radius: float, ball_radius: float = BALL_RADIUS) -> np.ndarray:

@@ -341,6 +341,8 @@ class SwingResult:
         Joint positions stayed within their limits.
     tick_us : array (n,)
         Wall time of each control tick [us] (the controller only, not the simulation).
+    face_normal : array (3,)
+        The club face's normal at the hit (for :func:`seds_casadi.ball.impact`).
     """
 
     t: np.ndarray
@@ -355,11 +357,20 @@ class SwingResult:
     peak_torque_ratio: float = np.nan
     limits_ok: bool = True
     tick_us: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    face_normal: np.ndarray = field(default_factory=lambda: np.full(3, np.nan))
 
     @property
     def direction_error_deg(self) -> float:
         """Angle between the measured and the commanded hitting velocity [deg]."""
         a, b = self.hit_velocity, self.commanded
+        c = a @ b / (np.linalg.norm(a) * np.linalg.norm(b))
+        return float(np.degrees(np.arccos(np.clip(c, -1, 1))))
+
+    @property
+    def face_error_deg(self) -> float:
+        """Horizontal angle between the club face's normal and the commanded direction at the
+        hit [deg]: where a flat face sends the ball (:func:`seds_casadi.ball.impact`)."""
+        a, b = self.face_normal[:2], self.commanded[:2]
         c = a @ b / (np.linalg.norm(a) * np.linalg.norm(b))
         return float(np.degrees(np.arccos(np.clip(c, -1, 1))))
 
@@ -476,7 +487,7 @@ def simulate_swing(robot: Robot, motion: HittingMotion, ball, alpha: float = 0.0
     events = sorted(perturb or [], key=lambda e: e["t"])
     T, Q, QD, TAU, X, TICK = [], [], [], [], [], []
     t, t_end = 0.0, max_time
-    hit_v = v_prev = None
+    hit_v = v_prev = hit_n = None
     ei = 0
     while t < t_end - 1e-12:
         while ei < len(events) and events[ei]["t"] <= t + 1e-12:
@@ -497,6 +508,7 @@ def simulate_swing(robot: Robot, motion: HittingMotion, ball, alpha: float = 0.0
             # tick and the previous one (near the ball the direction turns quickly)
             lam = float(ctl.hit["lam"])
             hit_v = v_now if v_prev is None else v_prev + lam * (v_now - v_prev)
+            hit_n = robot.head_pose(q)[1][:, 0]
             t_end = t + rest_time
         v_prev = v_now
         x, _ = robot.head_pose(q)
@@ -526,5 +538,6 @@ def simulate_swing(robot: Robot, motion: HittingMotion, ball, alpha: float = 0.0
     if ctl.hit is not None:
         res.hit_time = ctl.hit["t"]
         res.hit_velocity = hit_v
+        res.face_normal = hit_n
         res.commanded = ctl.hit["commanded"]
     return res

@@ -251,3 +251,15 @@ def test_bad_engine_is_refused():
         simulate_shots(f, [[0.0, 0.0]], [[1.0, 0.0]], engine="gpu")
     with pytest.raises(ValueError, match="record_paths"):
         simulate_shots(f, [[0.0, 0.0]], [[1.0, 0.0]], engine="compiled", record_paths=True)
+
+
+def test_impact_with_a_turned_face_leaves_along_its_normal():
+    v = np.array([1.0, 0.0, 0.0])
+    square = impact(v)
+    np.testing.assert_allclose(impact(v, face_normal=[1.0, 0.0, 0.0]), square)
+    th = np.deg2rad(10.0)
+    out = impact(v, face_normal=[np.cos(th), np.sin(th), 0.0])
+    assert np.degrees(np.arctan2(out[1], out[0])) == pytest.approx(10.0)
+    assert np.linalg.norm(out) == pytest.approx(np.linalg.norm(square) * np.cos(th))
+    with pytest.raises(ValueError, match="3-D"):
+        impact([1.0, 0.0], face_normal=[1.0, 0.0, 0.0])
