@@ -251,9 +251,12 @@ def simulate_shot_exudyn(field: Field, ball_xy, club_velocity=None, hole=None,
             nx = ny = 0.0
             nz = 1.0
         else:
-            gx, gy = surf.gradient(np.array([[px, py]]))[0]
-            inv = 1.0 / (1.0 + gx * gx + gy * gy) ** 0.5
-            nx, ny, nz = -gx * inv, -gy * inv, inv
+            cx, cy, nx, ny, nz = normal_cache
+            if (px - cx) ** 2 + (py - cy) ** 2 > 4e-6:  # the normal, refreshed every 2 mm
+                gx, gy = surf.gradient(np.array([[px, py]]))[0]
+                inv = 1.0 / (1.0 + gx * gx + gy * gy) ** 0.5
+                nx, ny, nz = -gx * inv, -gy * inv, inv
+                normal_cache[:] = [px, py, nx, ny, nz]
         wx, wy, wz = mbs_.GetNodeOutput(ball_node, ang_t)
         r = BALL_RADIUS
         sx = vx - r * (wy * nz - wz * ny)
@@ -267,6 +270,7 @@ def simulate_shot_exudyn(field: Field, ball_xy, club_velocity=None, hole=None,
 
     flat = field.surface.shape == "plane" and not np.any(field.surface.gradient(
         np.zeros((1, 2))))
+    normal_cache = [np.inf, np.inf, 0.0, 0.0, 1.0]
     ff_const = field.surface.shape != "rough"
     mbs.AddLoad(LoadForceVector(markerNumber=m_ball, loadVector=[0, 0, 0],
                                 loadVectorUserFunction=resistance))
