@@ -20,6 +20,8 @@ and the two are compared (``seds-casadi validate``).
   the field's local friction factor) against the ball's velocity acts at its centre while it
   rolls (contact point not slipping); on a rolling ball it decelerates it by (5/7) rho g.
 * **Ball**: a rigid sphere (46 g, radius 21.35 mm, solid-sphere inertia 2/5 m r^2).
+* **Ball at rest**: held at its place by a horizontal spring-damper until the club touches it
+  (on a slope it would otherwise roll away while the arm swings), then released.
 * **Hole**: a capture region: the ball drops when its centre is over the hole and its speed is
   below the capture speed for its offset (the fast model's chord criterion).
 * Without an arm (``simulate_shot_exudyn(field, ball, club_velocity)``), a free club-head
@@ -44,7 +46,7 @@ from .fields import Field
 __all__ = ["field_mesh", "ExudynShot", "simulate_shot_exudyn", "MAX_TRIANGLES"]
 
 MAX_TRIANGLES = 60_000
-HEAD_RADIUS = 0.02
+HEAD_RADIUS = 0.008  # small enough to clear the field (the head only touches the ball)
 
 
 def field_mesh(field: Field, spacing: float | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -203,6 +205,15 @@ def simulate_shot_exudyn(field: Field, ball_xy, club_velocity=None, hole=None,
                                referencePosition=p_ball.tolist(), gravity=[0, 0, -G],
                                nodeType=exu.NodeType.RotationRotationVector)
     m_ball = mbs.AddMarker(MarkerBodyRigid(bodyNumber=ball))
+    # the ball lies still until the club touches it (on a slope it would roll away while the
+    # arm swings): a spring-damper to its resting place, released at the first contact
+    from exudyn.utilities import MarkerBodyPosition, ObjectConnectorCartesianSpringDamper
+
+    m_rest = mbs.AddMarker(MarkerBodyPosition(bodyNumber=ground, localPosition=p_ball.tolist()))
+    m_ball_pos = mbs.AddMarker(MarkerBodyPosition(bodyNumber=ball, localPosition=[0, 0, 0]))
+    holder = mbs.AddObject(ObjectConnectorCartesianSpringDamper(
+        markerNumbers=[m_rest, m_ball_pos], stiffness=[2e3, 2e3, 0.0],
+        damping=[2 * np.sqrt(2e3 * BALL_MASS)] * 2 + [0.0]))
     gc.AddSphereWithMarker(m_ball, radius=BALL_RADIUS, contactStiffness=k_ball,
                            contactDamping=0.0, frictionMaterialIndex=1)
     if arm is None:
@@ -311,6 +322,7 @@ def simulate_shot_exudyn(field: Field, ball_xy, club_velocity=None, hole=None,
                 if not state["contact"]:
                     state["head_velocity"] = vh.copy()
                     state["contact_time"] = t
+                    mbs_.SetObjectParameter(holder, "activeConnector", False)
                 state["contact"] = True
             elif state["contact"]:
                 state["launch"] = np.array(v[:2])
