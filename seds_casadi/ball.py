@@ -12,9 +12,12 @@ Model (per unit mass; horizontal position p = (x, y), horizontal velocity u; g =
 * **Rolling resistance.** A deceleration (5/7) rho g along the surface velocity (rho from the
   field's Stimpmeter reading, times the field's local friction factor), projected on the
   horizontal plane.
-* **Skid after the impact.** A struck ball has no spin: it slides with kinetic friction mu_k
-  (0.2) until it rolls, which happens when its speed has fallen to 5/7 of the launch speed on
-  flat ground (after v0 / (3.5 mu_k g) seconds); full tangential gravity acts while sliding.
+* **Skid after the impact.** A struck ball has no spin: its contact point slips at the ball's
+  velocity. Kinetic friction mu_k g (mu_k = 0.2) acts against the slip, which therefore falls at
+  (7/2) mu_k g (gravity's full tangential part acts on both); the ball rolls once the slip is
+  gone (on flat ground at 5/7 of the launch speed, after v0 / (3.5 mu_k g) seconds). Tracking
+  the slip's direction, not only its size, matters on slopes: friction then also resists the
+  sideways slide that gravity starts (checked against exudyn's contact model).
 * **Walls** reflect the ball's centre at one ball radius from the boundary with the field's
   restitution; at **edges** the ball is lost.
 * **Hole capture.** A ball whose centre crosses the hole at distance b from its centre drops in
@@ -114,20 +117,23 @@ class ShotResult:
 
 
 def _rolling_acc(field: Field, P, U, slide):
+    """Surface terms of one step: the gravity acceleration (blended between sliding and
+    rolling by ``slide``), the full (sliding) one, the velocity's unit vector and the rolling
+    resistance's magnitude."""
     s = field.surface
     grad = s.gradient(P)
     hess = s.hessian(P)
     curv = np.einsum("ni,nij,nj->n", U, hess, U)
     s2 = 1.0 + np.sum(grad * grad, axis=1)
-    # slide: fraction of the step still skidding (0 rolling, 1 skidding; in between at the
+    # slide: fraction of the step still sliding (0 rolling, 1 sliding; in between at the
     # transition, so that the speed at the end of that step is exact on flat ground)
-    gfac = (5.0 / 7.0 + (2.0 / 7.0) * slide) * G
-    acc = -((gfac + curv) / s2)[:, None] * grad
+    full = -((G + curv) / s2)[:, None] * grad
+    acc = -(((5.0 / 7.0 + (2.0 / 7.0) * slide) * G + curv) / s2)[:, None] * grad
     vs = np.sqrt(np.sum(U * U, axis=1) + np.sum(grad * U, axis=1) ** 2)
     unit = U / np.maximum(vs, 1e-12)[:, None]
-    resist = ((1 - slide) * (5.0 / 7.0) * field.rolling_resistance
-              * field.surface.friction_factor(P) + slide * MU_SLIDE) * G
-    return acc, unit, resist, grad, s2
+    resist = (1 - slide) * (5.0 / 7.0) * field.rolling_resistance \
+        * field.surface.friction_factor(P) * G
+    return acc, full, unit, resist
 
 
 def simulate_shots(field: Field, ball_xy, launch_velocity, dt: float = 0.01,
@@ -182,7 +188,9 @@ def simulate_shots(field: Field, ball_xy, launch_velocity, dt: float = 0.01,
     if engine == "compiled":
         return ball_kernel(field, dt).run(P, U, max_time, Hh)
     n = len(P)
-    skid_left = np.linalg.norm(U, axis=1) / (3.5 * MU_SLIDE * G)
+    # slip velocity of the contact point: a struck ball has no spin, so it slips at its speed
+    S = U.copy()
+    mg = MU_SLIDE * G
     active = np.ones(n, bool)
     sunk = np.zeros(n, bool)
     out = np.zeros(n, bool)
@@ -197,15 +205,21 @@ def simulate_shots(field: Field, ball_xy, launch_velocity, dt: float = 0.01,
         idx = np.flatnonzero(active)
         if idx.size == 0:
             break
-        p, u, hole = P[idx], U[idx], Hh[idx]
-        rolling = skid_left[idx] <= 0
-        slide = np.clip(skid_left[idx] / dt, 0.0, 1.0)
-        acc, unit, resist, grad, s2 = _rolling_acc(field, p, u, slide)
+        p, u, hole, s = P[idx], U[idx], Hh[idx], S[idx]
+        s_mag = np.linalg.norm(s, axis=1)
+        # sliding friction acts against the slip, which falls at (7/2) mu g (plus gravity)
+        slide = np.clip(s_mag / (3.5 * mg * dt), 0.0, 1.0)
+        rolling = slide <= 0
+        s_hat = s / np.maximum(s_mag, 1e-12)[:, None]
+        acc, full, unit, resist = _rolling_acc(field, p, u, slide)
         speed = np.linalg.norm(u, axis=1)
         # a ball at (nearly) rest stays there when resistance can hold it on the slope
         slope_acc = np.linalg.norm(acc, axis=1)
         rest = (speed < STOP_SPEED) & rolling & (slope_acc <= resist)
-        dv = dt * (acc - resist[:, None] * unit)
+        dv = dt * (acc - resist[:, None] * unit - (slide * mg)[:, None] * s_hat)
+        new_s = s + dt * (full - 3.5 * mg * s_hat)
+        new_s[(slide < 1) | (np.sum(new_s * s, axis=1) < 0)] = 0.0
+        resist = resist + slide * mg
         # resistance cannot reverse the motion within a step
         new_u = u + dv
         reverse = (np.sum(new_u * u, axis=1) < 0) & (slope_acc <= resist)
@@ -216,7 +230,6 @@ def simulate_shots(field: Field, ball_xy, launch_velocity, dt: float = 0.01,
         decel = np.maximum(-np.sum(dv * u, axis=1) / np.maximum(speed, 1e-12), 1e-12) / dt
         tau = np.minimum(speed / decel, dt)
         new_p = p + np.where(reverse, 0.5 * tau, 0.5 * dt)[:, None] * (u + new_u)
-        skid_left[idx] -= dt
         # hole: closest approach of the step's segment to the hole centre
         seg = new_p - p
         L2 = np.maximum(np.sum(seg * seg, axis=1), 1e-300)
@@ -232,11 +245,12 @@ def simulate_shots(field: Field, ball_xy, launch_velocity, dt: float = 0.01,
                 new_p[low, j] = 2 * (lo + r) - new_p[low, j]
                 new_p[high, j] = 2 * (hi - r) - new_p[high, j]
                 new_u[low | high, j] *= -field.wall_restitution
+                new_s[low | high, j] *= -1.0
             lost = np.zeros(len(idx), bool)
         else:
             lost = ((new_p[:, 0] < b[0]) | (new_p[:, 0] > b[1]) | (new_p[:, 1] < b[2])
                     | (new_p[:, 1] > b[3]))
-        P[idx], U[idx] = new_p, new_u
+        P[idx], U[idx], S[idx] = new_p, new_u, new_s
         t = (k + 1) * dt
         done_sunk = drop
         done_out = lost & ~drop
@@ -291,8 +305,8 @@ class BallKernel:
     """The ball model's step in CasADi, looped ``steps_per_call`` times in compiled C and mapped
     over batches of shots on two threads. Same equations as the numpy engine (module docstring).
 
-    The state of a shot is (x, y, u_x, u_y, skid time left, status, time, hole x, hole y) with
-    status 0 while rolling, 1 sunk, 2 out, 3 stopped; finished shots are frozen. Between calls
+    The state of a shot is (x, y, u_x, u_y, slip_x, slip_y, status, time, hole x, hole y) with
+    status 0 while moving, 1 sunk, 2 out, 3 stopped; finished shots are frozen. Between calls
     the finished shots are dropped, so a batch costs what its longest shot needs.
 
     Parameters
@@ -319,7 +333,7 @@ class BallKernel:
         self.steps_per_call = int(steps_per_call)
         self.batches = (int(batches[0]), int(batches[1]))
         step = self._step(ca)
-        s = ca.MX.sym("s", 9)
+        s = ca.MX.sym("s", 10)
         x = s
         for _ in range(self.steps_per_call):
             x = step(x)
@@ -331,21 +345,28 @@ class BallKernel:
 
     def _step(self, ca):
         f, dt, r = self.field, self.dt, BALL_RADIUS
-        s = ca.SX.sym("s", 9)
-        p, u, skid, status, t = s[0:2], s[2:4], s[4], s[5], s[6]
+        mg = MU_SLIDE * G
+        s = ca.SX.sym("s", 10)
+        p, u, sl, status, t = s[0:2], s[2:4], s[4:6], s[6], s[7]
         grad, hess, fr = f.surface.casadi_terms(p, f.bounds)
-        rolling = skid <= 0
         curv = ca.mtimes([u.T, hess, u])
         s2 = 1 + ca.dot(grad, grad)
-        slide = ca.fmin(ca.fmax(skid / dt, 0.0), 1.0)
+        s_mag = ca.norm_2(sl)
+        slide = ca.fmin(ca.fmax(s_mag / (3.5 * mg * dt), 0.0), 1.0)
+        rolling = slide <= 0
+        s_hat = sl / ca.fmax(s_mag, 1e-12)
+        full = -((G + curv) / s2) * grad
         acc = -(((5.0 / 7.0 + (2.0 / 7.0) * slide) * G + curv) / s2) * grad
         vs = ca.sqrt(ca.dot(u, u) + ca.dot(grad, u) ** 2)
         unit = u / ca.fmax(vs, 1e-12)
-        resist = ((1 - slide) * (5.0 / 7.0) * f.rolling_resistance * fr + slide * MU_SLIDE) * G
+        resist_roll = (1 - slide) * (5.0 / 7.0) * f.rolling_resistance * fr * G
         slope = ca.norm_2(acc)
-        holds = slope <= resist
-        rest = ca.logic_and(ca.logic_and(ca.norm_2(u) < STOP_SPEED, rolling), holds)
-        dv = dt * (acc - resist * unit)
+        rest = ca.logic_and(ca.logic_and(ca.norm_2(u) < STOP_SPEED, rolling),
+                            slope <= resist_roll)
+        dv = dt * (acc - resist_roll * unit - slide * mg * s_hat)
+        new_s = sl + dt * (full - 3.5 * mg * s_hat)
+        new_s = ca.if_else(ca.logic_or(slide < 1, ca.dot(new_s, sl) < 0), ca.DM.zeros(2), new_s)
+        holds = slope <= resist_roll + slide * mg
         nu = u + dv
         reverse = ca.logic_and(ca.dot(nu, u) < 0, holds)
         nu = ca.if_else(ca.logic_or(reverse, rest), ca.DM.zeros(2), nu)
@@ -355,26 +376,30 @@ class BallKernel:
         npos = p + ca.if_else(reverse, 0.5 * tau, 0.5 * dt) * (u + nu)
         seg = npos - p
         L2 = ca.fmax(ca.dot(seg, seg), 1e-300)
-        hole = s[7:9]
+        hole = s[8:10]
         lam = ca.fmin(ca.fmax(ca.dot(hole - p, seg) / L2, 0.0), 1.0)
         off = ca.norm_2(p + lam * seg - hole)
         R = f.hole_radius
         cap = 2 * ca.sqrt(ca.fmax(R**2 - off**2, 0.0)) / np.sqrt(2 * r / G)
         drop = ca.logic_and(off < R, ca.norm_2(nu) < cap)
         b = f.bounds
-        pos, vel, lost = [], [], 0
+        pos, vel, slip, lost = [], [], [], 0
         for j, (lo, hi) in enumerate(((b[0], b[1]), (b[2], b[3]))):
             low, high = npos[j] < lo + r, npos[j] > hi - r
             if f.boundary == "walls":
+                hit = ca.logic_or(low, high)
                 pos.append(ca.if_else(low, 2 * (lo + r) - npos[j],
                                       ca.if_else(high, 2 * (hi - r) - npos[j], npos[j])))
-                vel.append(ca.if_else(ca.logic_or(low, high), -f.wall_restitution * nu[j], nu[j]))
+                vel.append(ca.if_else(hit, -f.wall_restitution * nu[j], nu[j]))
+                slip.append(ca.if_else(hit, -new_s[j], new_s[j]))
             else:
                 pos.append(npos[j])
                 vel.append(nu[j])
+                slip.append(new_s[j])
                 lost = ca.logic_or(lost, ca.logic_or(npos[j] < lo, npos[j] > hi))
         new_status = ca.if_else(drop, 1, ca.if_else(lost, 2, ca.if_else(rest, 3, 0)))
-        new = ca.vertcat(pos[0], pos[1], vel[0], vel[1], skid - dt, new_status, t + dt, hole)
+        new = ca.vertcat(pos[0], pos[1], vel[0], vel[1], slip[0], slip[1], new_status, t + dt,
+                         hole)
         return ca.Function("ball_step", [s], [ca.if_else(status == 0, new, s)])
 
     def run(self, P: np.ndarray, U: np.ndarray, max_time: float = 20.0,
@@ -383,11 +408,11 @@ class BallKernel:
         ``hole`` (n, 2; default the field's). Inputs are not validated here: use
         :func:`simulate_shots`."""
         n = len(P)
-        S = np.zeros((9, n))
-        S[7:9] = (np.tile(self.field.hole, (n, 1)) if hole is None else hole).T
+        S = np.zeros((10, n))
+        S[8:10] = (np.tile(self.field.hole, (n, 1)) if hole is None else hole).T
         S[0:2] = P.T
         S[2:4] = U.T
-        S[4] = np.linalg.norm(U, axis=1) / (3.5 * MU_SLIDE * G)
+        S[4:6] = U.T  # no spin at the impact: the contact point slips at the ball's speed
         active = np.arange(n)
         nb, ns = self.batches
         t_call = self.steps_per_call * self.dt
@@ -395,8 +420,8 @@ class BallKernel:
         while active.size and elapsed < max_time - 1e-12:
             n_big = (active.size // nb) * nb
             m = n_big + int(np.ceil((active.size - n_big) / ns)) * ns
-            X = np.zeros((9, m))
-            X[5] = 1.0  # padding: frozen
+            X = np.zeros((10, m))
+            X[6] = 1.0  # padding: frozen
             X[:, :active.size] = S[:, active]
             out = np.empty_like(X)
             for c in range(0, n_big, nb):
@@ -405,9 +430,9 @@ class BallKernel:
                 out[:, c:c + ns] = np.asarray(self._small(X[:, c:c + ns]))
             S[:, active] = out[:, :active.size]
             elapsed += t_call
-            active = active[S[5, active] == 0]
+            active = active[S[6, active] == 0]
         # a shot still rolling at the limit, or past it within the last call
-        over = (S[6] > max_time + 1e-9) | (S[5] == 0)
-        status = np.where(over, 0, S[5]).astype(int)
+        over = (S[7] > max_time + 1e-9) | (S[6] == 0)
+        status = np.where(over, 0, S[6]).astype(int)
         return ShotResult(status == 1, status == 2, status == 3, S[0:2].T.copy(),
-                          np.where(over, max_time, S[6]))
+                          np.where(over, max_time, S[7]))
