@@ -6,6 +6,7 @@ fit     fit a stable DS to demonstrations in a .npz/.csv file; write the model a
 lasa    run the LASA handwriting benchmark; write lasa.csv, summary.txt and figures
 table1  the paper's Table 1 (GPR vs GMR for the hitting parameters); write table1.csv, figures
 validate shots by a robot checked in exudyn against the fast ball model; validation.csv, report
+play    the main job: learn, teach, play a round with the robot, check a few shots in exudyn
 """
 
 from __future__ import annotations
@@ -96,6 +97,30 @@ def build_parser() -> argparse.ArgumentParser:
     v.add_argument("--shots", type=int, default=10, help="number of shots [10]")
     v.add_argument("--seed", type=int, default=0, help="random seed [0]")
     v.add_argument("--out", default="validate_out", help="output folder [validate_out]")
+
+    pl = sub.add_parser("play", help="the main job: learn the motion and the hitting parameters, "
+                                     "then play a round",
+                        description="Learn the hitting motion (SEDS), let the teacher collect "
+                                    "good shots, learn the hitting parameters (GPR and GMR) and "
+                                    "play a round of shots with the robot on the field's ball "
+                                    "model, a few checked in exudyn.")
+    pl.add_argument("--robot", default="wam", help="robot name or .urdf [wam]")
+    pl.add_argument("--field", default="arctan", help="field name or .json file [arctan]")
+    pl.add_argument("--demos", default=None, help="hitting demonstrations (.npz/.csv) [shipped]")
+    pl.add_argument("--learner", nargs="+", default=["gpr", "gmr"],
+                    choices=["gpr", "gmr", "sep_gmr"], help="hitting-parameter learners [gpr gmr]")
+    pl.add_argument("--shots", type=int, default=20, help="situations in the round [20]")
+    pl.add_argument("--validate", type=int, default=2,
+                    help="shots checked again in exudyn [2]")
+    pl.add_argument("--seed", type=int, default=0, help="random seed [0]")
+    pl.add_argument("--models", default=None,
+                    help="reuse the models/ folder of an earlier run (skips learning)")
+    pl.add_argument("--workers", type=int, default=1, help="local worker processes [1]")
+    pl.add_argument("--dask", default=None, metavar="ADDRESS",
+                    help="play the shots on a Dask scheduler (tcp://host:8786)")
+    pl.add_argument("--quick", action="store_true",
+                    help="3 situations, a coarse teacher, 1 exudyn check: under a minute")
+    pl.add_argument("--out", default="play_out", help="output folder [play_out]")
     return p
 
 
@@ -156,6 +181,14 @@ def _cmd_validate(a) -> int:
     return 0
 
 
+def _cmd_play(a) -> int:
+    from .play import play
+
+    play(a.robot, a.field, a.demos, a.learner, a.shots, a.seed, a.out, a.models, a.quick,
+         a.validate, a.workers, a.dask, progress=sys.stderr.isatty())
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``seds-casadi``; returns the exit code."""
     parser = build_parser()
@@ -175,6 +208,8 @@ def main(argv: list[str] | None = None) -> int:
             return _cmd_table1(a)
         if a.command == "validate":
             return _cmd_validate(a)
+        if a.command == "play":
+            return _cmd_play(a)
     except (ValueError, TypeError, FileNotFoundError, SEDSError) as exc:
         print(f"seds-casadi {a.command}: error: {exc}", file=sys.stderr)
         return 2

@@ -30,6 +30,8 @@ Choices where the paper leaves them open (documented for users):
 
 from __future__ import annotations
 
+import os
+import tempfile
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
@@ -118,6 +120,7 @@ class TargetField:
         a = np.eye(d)[0] if approach is None else np.asarray(approach, dtype=float)
         if np.dot(psi, a) < 0:
             psi = -psi
+        self.approach = a
         self.jacobian = J
         self.hitting_direction = psi
         self.eigenvalues = ev
@@ -336,6 +339,46 @@ class HittingMotion:
         keep = S > 1e-3 * S.max()
         strength = StrengthFactor.fit(X[keep], S[keep], strength_components, random_state)
         return cls(field_, strength)
+
+    # ------------------------------------------------------------ persistence
+    def save(self, folder: str | os.PathLike) -> None:
+        """Write the motion into ``folder``: ``stable_ds.npz`` (the certified SEDS model, with
+        its checksum) and ``strength.npz`` (strength factor, approach direction, rest length);
+        no pickle."""
+        folder = os.fspath(folder)
+        os.makedirs(folder, exist_ok=True)
+        self.target_field.ds.save(os.path.join(folder, "stable_ds.npz"))
+        s = self.strength
+        path = os.path.join(folder, "strength.npz")
+        fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".npz", dir=folder)
+        try:
+            with os.fdopen(fd, "wb") as fh:
+                np.savez(fh, priors=s.priors, means=s.means, covariances=s.covariances,
+                         log_range=np.array(s.log_range),
+                         approach=np.asarray(self.target_field.approach, float),
+                         rest_length=np.array(self.rest_length))
+            os.replace(tmp, path)
+        except BaseException:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
+            raise
+
+    @classmethod
+    def load(cls, folder: str | os.PathLike) -> HittingMotion:
+        """Read a motion written by :meth:`save` (the SEDS model is re-certified)."""
+        folder = os.fspath(folder)
+        ds = StableDS.load(os.path.join(folder, "stable_ds.npz"))
+        path = os.path.join(folder, "strength.npz")
+        try:
+            with np.load(path, allow_pickle=False) as f:
+                strength = StrengthFactor(f["priors"], f["means"], f["covariances"],
+                                          tuple(f["log_range"]))
+                approach = f["approach"]
+                rest = float(f["rest_length"])
+        except (OSError, KeyError, ValueError) as exc:
+            raise ValueError(f"{path}: not a strength-factor file ({exc})") from None
+        return cls(TargetField(ds, approach=approach if approach.size == 3 else None),
+                   strength, rest)
 
     # ------------------------------------------------------------ evaluation
     def velocity(self, X, alpha: float = 0.0, kappa: float = 1.0) -> np.ndarray:

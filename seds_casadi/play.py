@@ -1,0 +1,256 @@
+"""``seds-casadi play``: the whole pipeline end to end (paper Fig. 5).
+
+1. **Hitting motion**: SEDS + strength factor from the demonstrations (shipped putts by default).
+2. **Teacher**: good shots on the field's ball model (:mod:`seds_casadi.teacher`).
+3. **Hitting parameters**: each learner (GPR, GMR) fitted on the teacher's data set.
+4. **A round**: shots from random ball and hole positions; for each shot and learner the
+   predicted (alpha, kappa) is executed by the 500 Hz controller on the simulated robot
+   (Pinocchio) and the ball, launched by the club face as the robot holds it, rolls on the
+   field's ball model. Shots are independent tasks: local processes or a Dask cluster.
+5. **Validation**: the first few shots again in exudyn (arm, club face, ball on the mesh).
+
+Everything learned is saved in ``OUT/models`` (the motion as ``.npz`` files, the teacher's data
+set); ``--models DIR`` reuses them and skips steps 1-2 (the learners of step 3 are refitted from
+the saved data set: they take well under a second).
+"""
+
+from __future__ import annotations
+
+import os
+import time
+
+import numpy as np
+
+from ._io import atomic_csv, atomic_text
+
+__all__ = ["play", "SHOT_COLUMNS"]
+
+SHOT_COLUMNS = ("method", "shot", "ball_x", "ball_y", "hole_x", "hole_y", "alpha", "kappa",
+                "hit", "sunk", "direction_error_deg", "speed_error", "final_x", "final_y",
+                "sunk_exudyn")
+LEARNERS = ("gpr", "gmr")
+
+_MOTIONS: dict = {}
+
+
+def _motion(folder: str):
+    from .motion import HittingMotion
+
+    if folder not in _MOTIONS:
+        _MOTIONS[folder] = HittingMotion.load(folder)
+    return _MOTIONS[folder]
+
+
+def _shot(task: dict) -> dict:
+    """One shot: the robot's swing on Pinocchio, then the ball model (a picklable task)."""
+    from .ball import BALL_RADIUS, impact, simulate_shots
+    from .control import default_base, simulate_swing
+    from .fields import Field
+    from .robots import load_robot
+
+    field = Field.from_dict(task["field_spec"], source=task["field"])
+    motion = _motion(task["motion"])
+    ball, hole = np.asarray(task["ball"]), np.asarray(task["hole"])
+    base = np.asarray(default_base(task["robot"]), float)
+    base[:2] += ball
+    base[2] += max(0.0, float(field.surface.height(base[None, :2])[0]))
+    robot = load_robot(task["robot"], base=tuple(base), field=field)
+    z = float(field.surface.height(ball[None])[0]) + BALL_RADIUS
+    row = {"method": task["method"], "shot": task["shot"], "ball_x": ball[0], "ball_y": ball[1],
+           "hole_x": hole[0], "hole_y": hole[1], "alpha": task["alpha"],
+           "kappa": task["kappa"], "hit": False, "sunk": False, "direction_error_deg": np.nan,
+           "speed_error": np.nan, "final_x": ball[0], "final_y": ball[1], "sunk_exudyn": ""}
+    try:
+        swing = simulate_swing(robot, motion, np.array([ball[0], ball[1], z]), task["alpha"],
+                               task["kappa"])
+    except ValueError as exc:  # out of reach, no start configuration: a miss, with the reason
+        row["error"] = str(exc)
+        return row
+    if not swing.hit:
+        return row
+    launch = impact(swing.hit_velocity[None], face_normal=swing.face_normal[None])
+    res = simulate_shots(field, ball[None], launch, hole=hole, engine="numpy", record_paths=True)
+    row.update(hit=True, sunk=bool(res.sunk[0]),
+               direction_error_deg=swing.direction_error_deg, speed_error=swing.speed_error,
+               final_x=float(res.final_position[0, 0]), final_y=float(res.final_position[0, 1]),
+               path=res.paths[0])
+    return row
+
+
+def _situations(field, data, n: int, rng):
+    """Random balls in the field's ball region and holes where the teacher's data put them
+    (along the far edge, or the field's hole)."""
+    r = field.ball_region
+    balls = np.column_stack([rng.uniform(r[0], r[1], n), rng.uniform(r[2], r[3], n)])
+    if np.ptp(data.hole, axis=0).max() > 0:
+        lo, hi = data.hole.min(axis=0), data.hole.max(axis=0)
+        holes = lo + rng.uniform(size=(n, 2)) * (hi - lo)
+    else:
+        holes = np.tile(field.hole, (n, 1))
+    return balls, holes
+
+
+def play(robot: str = "wam", field: str = "arctan", demos: str | None = None,
+         learners=LEARNERS, shots: int = 20, seed: int = 0, out: str = "play_out",
+         models: str | None = None, quick: bool = False, validate_shots: int = 2,
+         workers: int = 1, dask: str | None = None, progress: bool = True) -> dict:
+    """Run the main job (module docstring); returns a summary dict and writes ``out``."""
+    from .datasets import load_hitting_demos
+    from .demonstrations import load_demonstrations
+    from .executors import open_executor
+    from .fields import load_field
+    from .hitting import make_model
+    from .motion import HittingMotion
+    from .robots import load_robot, robot_names
+    from .teacher import HittingDataset, Stroke, collect_dataset
+
+    learners = list(learners)
+    bad = [m for m in learners if m not in ("gpr", "gmr", "sep_gmr")]
+    if bad:
+        raise ValueError(f"unknown learner {bad[0]!r}; valid: gpr, gmr, sep_gmr")
+    if robot not in robot_names() and not str(robot).endswith(".urdf"):
+        raise ValueError(f"unknown robot {robot!r}; known: {', '.join(robot_names())}")
+    if int(shots) < 1:
+        raise ValueError(f"shots must be at least 1, got {shots}")
+    if quick:
+        shots, validate_shots = min(int(shots), 3), min(int(validate_shots), 1)
+    fld = load_field(field)
+    load_robot(robot)  # a robot that does not load fails before any work
+    os.makedirs(os.path.join(out, "models"), exist_ok=True)
+    times: dict[str, float] = {}
+    rng = np.random.default_rng(seed)
+
+    # 1-2. hitting motion and the teacher's data, learned or reused
+    t0 = time.perf_counter()
+    motion_dir = os.path.join(out, "models", "motion")
+    data_path = os.path.join(out, "models", f"dataset_{fld.name}.npz")
+    if models:
+        src_motion = os.path.join(models, "motion")
+        src_data = os.path.join(models, f"dataset_{fld.name}.npz")
+        for p in (os.path.join(src_motion, "stable_ds.npz"), src_data):
+            if not os.path.exists(p):
+                raise ValueError(f"--models {models}: no {os.path.relpath(p, models)} there; "
+                                 f"give the folder a previous 'play --out' wrote as its models/ "
+                                 f"(for the field {fld.name!r})")
+        motion = HittingMotion.load(src_motion)
+        data = HittingDataset.load(src_data)
+        print(f"reused the hitting motion and {len(data)} good shots from {models}", flush=True)
+    else:
+        d = load_demonstrations(demos) if demos else load_hitting_demos()
+        motion = HittingMotion.fit(d, n_components=3)
+        times["hitting motion (SEDS + GMR)"] = time.perf_counter() - t0
+        print(f"hitting motion: v* = {motion.hitting_speed:.3f} m/s "
+              f"({times['hitting motion (SEDS + GMR)']:.1f} s)", flush=True)
+        t1 = time.perf_counter()
+        data = collect_dataset(fld, Stroke.from_motion(motion), progress=progress,
+                               **({"resolution": (81, 26)} if quick else {}))
+        times["teacher"] = time.perf_counter() - t1
+        print(f"teacher: {len(data)} good shots on {fld.name} ({times['teacher']:.1f} s)",
+              flush=True)
+    motion.save(motion_dir)
+    data.save(data_path)
+
+    # 3. learners
+    t2 = time.perf_counter()
+    k = 3 if data.strategy == "minimal_speed" else 2
+    fitted = {m: make_model(m, **({} if m == "gpr" else {"n_components": k})).fit(
+        data.situations, data.outputs) for m in learners}
+    times["hitting-parameter models"] = time.perf_counter() - t2
+
+    # 4. the round
+    t3 = time.perf_counter()
+    balls, holes = _situations(fld, data, int(shots), rng)
+    tasks = []
+    for m, model in fitted.items():
+        pred = model.predict(holes - balls)
+        for i in range(len(balls)):
+            kappa = float(pred[i, 1]) if pred.shape[1] > 1 else float(data.kappa[0])
+            tasks.append({"method": m, "shot": i, "ball": balls[i].tolist(),
+                          "hole": holes[i].tolist(), "alpha": float(np.deg2rad(pred[i, 0])),
+                          "kappa": kappa, "robot": robot, "field": fld.name,
+                          "field_spec": fld.spec, "motion": os.path.abspath(motion_dir)})
+    with open_executor(workers, dask) as ex:
+        futures = [ex.submit(_shot, t) for t in tasks]
+        it = futures
+        if progress:
+            from tqdm.auto import tqdm
+
+            it = tqdm(futures, desc=f"playing {len(tasks)} shots", unit="shot")
+        rows = [f.result() for f in it]
+    times["round (robot + ball model)"] = time.perf_counter() - t3
+
+    # 5. a few shots again in exudyn
+    t4 = time.perf_counter()
+    if validate_shots > 0:
+        from .control import default_base
+        from .validation import simulate_shot_exudyn
+
+        for row in [r for r in rows if r["method"] == learners[0] and r["hit"]][:validate_shots]:
+            ball = np.array([row["ball_x"], row["ball_y"]])
+            base = np.asarray(default_base(robot), float)
+            base[:2] += ball
+            base[2] += max(0.0, float(fld.surface.height(base[None, :2])[0]))
+            ex_shot = simulate_shot_exudyn(fld, ball, hole=[row["hole_x"], row["hole_y"]], arm={
+                "robot": load_robot(robot, base=tuple(base), field=fld), "motion": motion,
+                "alpha": row["alpha"], "kappa": row["kappa"]})
+            row["sunk_exudyn"] = bool(ex_shot.sunk)
+        times["exudyn validation"] = time.perf_counter() - t4
+
+    # outputs
+    atomic_csv(os.path.join(out, "shots.csv"), SHOT_COLUMNS,
+               ([r[c] for c in SHOT_COLUMNS] for r in rows))
+    rates = {m: float(np.mean([r["sunk"] for r in rows if r["method"] == m])) for m in learners}
+    checked = [r for r in rows if r["sunk_exudyn"] != ""]
+    lines = [f"played {len(balls)} situations on {fld.name} with the {robot}"]
+    lines += [f"  {m}: {rates[m]:.0%} sunk" for m in learners]
+    if checked:
+        agree = np.mean([r["sunk"] == r["sunk_exudyn"] for r in checked])
+        lines.append(f"  exudyn agreed with the ball model on {agree:.0%} of "
+                     f"{len(checked)} checked shots")
+    lines.append("time per stage:")
+    lines += [f"  {k}: {v:.1f} s" for k, v in times.items()]
+    text = "\n".join(lines) + "\n"
+    atomic_text(os.path.join(out, "summary.txt"), text)
+    _figures(fld, motion, data, fitted, rows, learners, out)
+    print(text, end="")
+    print(f"wrote {os.path.join(out, 'shots.csv')}, summary.txt, figures and models/ in {out}")
+    return {"success": rates, "times": times, "rows": rows}
+
+
+def _figures(fld, motion, data, fitted, rows, learners, out) -> None:
+    from .motion import rotation_z
+    from .plotting import _plt, plot_field, save_figure
+
+    plt = _plt()
+    fig, axs = plt.subplots(len(learners), 1, figsize=(9, 3.6 * len(learners)), squeeze=False)
+    for ax, m in zip(axs[:, 0], learners):
+        rs = [r for r in rows if r["method"] == m]
+        plot_field(fld, ax=ax, paths=[r["path"] for r in rs if "path" in r],
+                   sunk=[r["sunk"] for r in rs if "path" in r],
+                   ball=np.array([[r["ball_x"], r["ball_y"]] for r in rs]),
+                   hole=np.array([[r["hole_x"], r["hole_y"]] for r in rs]))
+        ax.set_title(f"{m}: {np.mean([r['sunk'] for r in rs]):.0%} sunk (green: sunk, red: "
+                     f"missed)", fontsize=9)
+    save_figure(fig, os.path.join(out, "shots.png"))
+    # the learned motion: swings from a few starts, turned by three angles, seen from above
+    fig, ax = plt.subplots(figsize=(6, 5))
+    for alpha, c in ((0.0, "k"), (0.3, "tab:blue"), (-0.3, "tab:orange")):
+        for y in (-0.1, 0.0, 0.1):
+            r = motion.rollout(rotation_z(alpha) @ np.array([-0.3, y, 0.05]), alpha=alpha,
+                               rest_time=0.1, dt=0.004)
+            ax.plot(r.positions[:, 0], r.positions[:, 1], "-", color=c, lw=1)
+    ax.plot(0, 0, "o", color="w", mec="k", ms=9)
+    ax.set_aspect("equal")
+    ax.set_title("the learned hitting motion (Eq. 14) for alpha = 0, +-0.3 rad", fontsize=9)
+    save_figure(fig, os.path.join(out, "motion.png"))
+    # the hitting-parameter models against the teacher's data
+    fig, ax = plt.subplots(figsize=(6, 4.5))
+    y = data.outputs[:, 0]
+    for m, model in fitted.items():
+        ax.plot(y, model.predict(data.situations)[:, 0], "o", ms=4, label=m)
+    ax.plot([y.min(), y.max()], [y.min(), y.max()], "k-", lw=0.8)
+    ax.set_xlabel("teacher's hitting angle [deg]")
+    ax.set_ylabel("model's hitting angle [deg]")
+    ax.legend(fontsize=8)
+    ax.set_title("hitting-parameter models on the teacher's data", fontsize=9)
+    save_figure(fig, os.path.join(out, "hitting_parameters.png"))

@@ -1,0 +1,69 @@
+"""The main job end to end: `seds-casadi play --quick` through the installed console script."""
+
+import csv
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from seds_casadi.play import SHOT_COLUMNS
+
+SCRIPT = Path(sys.executable).parent / "seds-casadi"
+
+
+def _run(*args, timeout=600):
+    exe = [str(SCRIPT)] if SCRIPT.exists() else [sys.executable, "-m", "seds_casadi"]
+    return subprocess.run(exe + list(args), capture_output=True, text=True, timeout=timeout,
+                          env=dict(os.environ, MPLBACKEND="Agg"))
+
+
+@pytest.fixture(scope="module")
+def quick_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("play") / "out"
+    r = _run("play", "--quick", "--out", str(out))
+    assert r.returncode == 0, r.stderr[-3000:]
+    return out, r
+
+
+def test_play_quick_writes_shots_summary_figures_and_models(quick_run):
+    out, r = quick_run
+    assert SCRIPT.exists()  # the console script itself was run
+    with open(out / "shots.csv") as fh:
+        rows = list(csv.DictReader(fh))
+    assert tuple(rows[0]) == SHOT_COLUMNS
+    assert {row["method"] for row in rows} == {"gpr", "gmr"} and len(rows) == 6
+    for row in rows:
+        assert row["hit"] in ("True", "False") and row["sunk"] in ("True", "False")
+        assert -0.45 <= float(row["ball_y"]) <= 0.45
+    # every shot the robot hit came within 2 deg and 5 % of the commanded velocity
+    hit = [row for row in rows if row["hit"] == "True"]
+    assert hit and all(float(row["direction_error_deg"]) < 2 for row in hit)
+    assert all(float(row["speed_error"]) < 0.05 for row in hit)
+    assert sum(row["sunk_exudyn"] != "" for row in rows) == 1
+    summary = (out / "summary.txt").read_text()
+    assert "gpr:" in summary and "time per stage" in summary
+    for name in ("shots.png", "motion.png", "hitting_parameters.png"):
+        assert (out / name).stat().st_size > 1000
+    assert (out / "models" / "motion" / "stable_ds.npz").exists()
+    assert (out / "models" / "dataset_arctan.npz").exists()
+
+
+def test_play_reuses_saved_models(quick_run, tmp_path):
+    out, _ = quick_run
+    r = _run("play", "--quick", "--models", str(out / "models"), "--out", str(tmp_path / "b"),
+             "--validate", "0")
+    assert r.returncode == 0, r.stderr[-3000:]
+    assert "reused the hitting motion" in r.stdout and "teacher:" not in r.stdout
+    assert (tmp_path / "b" / "shots.csv").exists()
+
+
+def test_play_bad_input_is_a_clear_error(tmp_path):
+    r = _run("play", "--quick", "--robot", "r2d2", "--out", str(tmp_path / "x"))
+    assert r.returncode == 2 and "unknown robot 'r2d2'" in r.stderr
+    r = _run("play", "--quick", "--models", str(tmp_path / "none"), "--out",
+             str(tmp_path / "y"))
+    assert r.returncode == 2 and "no motion" in r.stderr
+    r = _run("play", "--quick", "--field", "moon", "--out", str(tmp_path / "z"))
+    assert r.returncode == 2 and "no field 'moon'" in r.stderr
