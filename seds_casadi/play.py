@@ -23,7 +23,7 @@ import numpy as np
 
 from ._io import atomic_csv, atomic_text
 
-__all__ = ["play", "SHOT_COLUMNS"]
+__all__ = ["play", "play_shot", "SHOT_COLUMNS"]
 
 SHOT_COLUMNS = ("method", "shot", "ball_x", "ball_y", "hole_x", "hole_y", "alpha", "kappa",
                 "hit", "sunk", "direction_error_deg", "speed_error", "final_x", "final_y",
@@ -33,16 +33,22 @@ LEARNERS = ("gpr", "gmr")
 _MOTIONS: dict = {}
 
 
-def _motion(folder: str):
+def _motion(folder):
     from .motion import HittingMotion
 
+    if isinstance(folder, HittingMotion):
+        return folder
     if folder not in _MOTIONS:
         _MOTIONS[folder] = HittingMotion.load(folder)
     return _MOTIONS[folder]
 
 
-def _shot(task: dict) -> dict:
-    """One shot: the robot's swing on Pinocchio, then the ball model (a picklable task)."""
+def play_shot(task: dict) -> dict:
+    """One shot: the robot's swing on Pinocchio, then the ball model (a picklable task).
+
+    ``task`` has ``method, shot, ball (2,), hole (2,), alpha [rad], kappa, robot, field (name),
+    field_spec (dict), motion`` (a :class:`~seds_casadi.motion.HittingMotion` or the folder it
+    was saved in). Returns the shot's row of ``shots.csv`` (plus the ball's ``path``)."""
     from .ball import BALL_RADIUS, impact, simulate_shots
     from .control import default_base, simulate_swing
     from .fields import Field
@@ -170,7 +176,7 @@ def play(robot: str = "wam", field: str = "arctan", demos: str | None = None,
                           "kappa": kappa, "robot": robot, "field": fld.name,
                           "field_spec": fld.spec, "motion": os.path.abspath(motion_dir)})
     with open_executor(workers, dask) as ex:
-        futures = [ex.submit(_shot, t) for t in tasks]
+        futures = [ex.submit(play_shot, t) for t in tasks]
         it = futures
         if progress:
             from tqdm.auto import tqdm
