@@ -37,7 +37,7 @@ from .motion import HittingMotion, rotation_z
 from .robots import Robot
 
 __all__ = ["SwingController", "SwingResult", "Gains", "simulate_swing", "place_head",
-           "default_base", "gravity_ratio", "face_orientation"]
+           "default_base", "place_robot", "gravity_ratio", "face_orientation"]
 
 
 def _log3(R: np.ndarray) -> np.ndarray:
@@ -428,6 +428,19 @@ def place_head(robot: Robot, position, direction, q0=None, iterations: int = 200
             return q
     raise ValueError(f"{robot.name}: cannot place the club head at {np.round(target, 3).tolist()}"
                      f" (closest {best_pos:.3f} m away): move the base or the start")
+
+
+def place_robot(name: str, ball_xy, field=None, **kwargs) -> Robot:
+    """The robot ``name`` standing at its :func:`default_base` beside the ball at ``ball_xy``
+    (field frame), on the field's surface there when ``field`` is given; ``kwargs`` go to
+    :func:`seds_casadi.robots.load_robot`."""
+    from .robots import load_robot
+
+    base = np.asarray(default_base(name), float)
+    base[:2] += np.asarray(ball_xy, float)[:2]
+    if field is not None:
+        base[2] += max(0.0, float(field.surface.height(base[None, :2])[0]))
+    return load_robot(name, base=tuple(base), field=field, **kwargs)
 
 
 def default_base(name: str) -> tuple:

@@ -50,17 +50,13 @@ def play_shot(task: dict) -> dict:
     field_spec (dict), motion`` (a :class:`~seds_casadi.motion.HittingMotion` or the folder it
     was saved in). Returns the shot's row of ``shots.csv`` (plus the ball's ``path``)."""
     from .ball import BALL_RADIUS, impact, simulate_shots
-    from .control import default_base, simulate_swing
+    from .control import place_robot, simulate_swing
     from .fields import Field
-    from .robots import load_robot
 
     field = Field.from_dict(task["field_spec"], source=task["field"])
     motion = _motion(task["motion"])
     ball, hole = np.asarray(task["ball"]), np.asarray(task["hole"])
-    base = np.asarray(default_base(task["robot"]), float)
-    base[:2] += ball
-    base[2] += max(0.0, float(field.surface.height(base[None, :2])[0]))
-    robot = load_robot(task["robot"], base=tuple(base), field=field)
+    robot = place_robot(task["robot"], ball, field)
     z = float(field.surface.height(ball[None])[0]) + BALL_RADIUS
     row = {"method": task["method"], "shot": task["shot"], "ball_x": ball[0], "ball_y": ball[1],
            "hole_x": hole[0], "hole_y": hole[1], "alpha": task["alpha"],
@@ -188,16 +184,13 @@ def play(robot: str = "wam", field: str = "arctan", demos: str | None = None,
     # 5. a few shots again in exudyn
     t4 = time.perf_counter()
     if validate_shots > 0:
-        from .control import default_base
+        from .control import place_robot
         from .validation import simulate_shot_exudyn
 
         for row in [r for r in rows if r["method"] == learners[0] and r["hit"]][:validate_shots]:
             ball = np.array([row["ball_x"], row["ball_y"]])
-            base = np.asarray(default_base(robot), float)
-            base[:2] += ball
-            base[2] += max(0.0, float(fld.surface.height(base[None, :2])[0]))
             ex_shot = simulate_shot_exudyn(fld, ball, hole=[row["hole_x"], row["hole_y"]], arm={
-                "robot": load_robot(robot, base=tuple(base), field=fld), "motion": motion,
+                "robot": place_robot(robot, ball, fld), "motion": motion,
                 "alpha": row["alpha"], "kappa": row["kappa"]})
             row["sunk_exudyn"] = bool(ex_shot.sunk)
         times["exudyn validation"] = time.perf_counter() - t4

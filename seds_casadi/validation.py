@@ -398,12 +398,11 @@ def validate(robot_name: str = "wam", field_name: str = "flat", shots: int = 10,
 
     from ._io import atomic_csv, atomic_text
     from .ball import impact, simulate_shots
-    from .control import default_base, simulate_swing
+    from .control import place_robot, simulate_swing
     from .datasets import load_hitting_demos
     from .fields import load_field
     from .hitting import make_model
     from .motion import HittingMotion
-    from .robots import load_robot
     from .teacher import Stroke, collect_dataset
 
     if int(shots) < 1:
@@ -421,10 +420,7 @@ def validate(robot_name: str = "wam", field_name: str = "flat", shots: int = 10,
 
     def placed(ball_xy):
         # the robot stands at its default place beside each ball, on the surface
-        base = np.asarray(default_base(robot_name), float)
-        base[:2] += ball_xy
-        base[2] += max(0.0, float(fld.surface.height(base[None, :2])[0]))
-        return load_robot(robot_name, base=tuple(base), field=fld)
+        return place_robot(robot_name, ball_xy, fld)
 
     lo, hi = data.hole.min(axis=0), data.hole.max(axis=0)
     rows, paths = [], []
@@ -655,9 +651,9 @@ def _add_arm(mbs, arm: dict, p_ball: np.ndarray):
             mbs_.SetObjectParameter(obj, "jointForceVector", tau.tolist())
             nxt[0] += ctl.period
 
-    def head(mbs_):
-        import pinocchio as pin
+    import pinocchio as pin
 
+    def head(mbs_):
         q = np.asarray(mbs_.GetNodeOutput(node, coords))
         qd = np.asarray(mbs_.GetNodeOutput(node, coords_t))
         pin.computeJointJacobians(robot.model, robot.data, q)

@@ -175,3 +175,16 @@ def test_compiled_hitting_ds_matches_numpy(motion):
                                    atol=1e-12)
     with pytest.raises(TypeError, match="arguments"):
         fast(np.zeros(3))
+
+
+def test_motion_save_and_load_round_trip(motion, tmp_path):
+    motion.save(tmp_path / "m")
+    back = HittingMotion.load(tmp_path / "m")
+    X = np.random.default_rng(3).normal(scale=0.2, size=(25, 3))
+    np.testing.assert_allclose(back.velocity(X, 0.3, 1.2), motion.velocity(X, 0.3, 1.2),
+                               rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(back.hitting_direction, motion.hitting_direction)
+    assert back.hitting_speed == motion.hitting_speed
+    (tmp_path / "m" / "strength.npz").write_bytes(b"broken")
+    with pytest.raises(ValueError, match="strength-factor file"):
+        HittingMotion.load(tmp_path / "m")
