@@ -23,6 +23,23 @@ def atomic_text(path: str | os.PathLike, text: str) -> None:
         raise
 
 
+def atomic_npz(path: str | os.PathLike, **arrays) -> None:
+    """Write arrays to an ``.npz`` file atomically (no pickle: plain arrays only)."""
+    import numpy as np
+
+    path = os.fspath(path)
+    folder = os.path.dirname(os.path.abspath(path))
+    fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".npz", dir=folder)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            np.savez(fh, **arrays)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
 def atomic_csv(path: str | os.PathLike, header: Iterable[str], rows: Iterable[Iterable]) -> None:
     """Write a CSV file (header, then rows; floats with 6 significant digits) atomically."""
     import io

@@ -31,13 +31,13 @@ Choices where the paper leaves them open (documented for users):
 from __future__ import annotations
 
 import os
-import tempfile
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import casadi as ca
 import numpy as np
 
+from ._io import atomic_npz
 from .demonstrations import Demonstrations
 from .gmm import gmr_predict, responsibilities_casadi
 from .seds import SEDS
@@ -349,19 +349,10 @@ class HittingMotion:
         os.makedirs(folder, exist_ok=True)
         self.target_field.ds.save(os.path.join(folder, "stable_ds.npz"))
         s = self.strength
-        path = os.path.join(folder, "strength.npz")
-        fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".npz", dir=folder)
-        try:
-            with os.fdopen(fd, "wb") as fh:
-                np.savez(fh, priors=s.priors, means=s.means, covariances=s.covariances,
-                         log_range=np.array(s.log_range),
-                         approach=np.asarray(self.target_field.approach, float),
-                         rest_length=np.array(self.rest_length))
-            os.replace(tmp, path)
-        except BaseException:
-            if os.path.exists(tmp):
-                os.unlink(tmp)
-            raise
+        atomic_npz(os.path.join(folder, "strength.npz"), priors=s.priors, means=s.means,
+                   covariances=s.covariances, log_range=np.array(s.log_range),
+                   approach=np.asarray(self.target_field.approach, float),
+                   rest_length=np.array(self.rest_length))
 
     @classmethod
     def load(cls, folder: str | os.PathLike) -> HittingMotion:

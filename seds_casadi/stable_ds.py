@@ -20,11 +20,11 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import tempfile
 
 import casadi as ca
 import numpy as np
 
+from ._io import atomic_npz
 from .errors import ModelFileError, StabilityError
 from .gmm import responsibilities, responsibilities_casadi
 
@@ -283,16 +283,7 @@ class StableDS:
             "target": self.target, "fit_info": np.array(info_json),
             "checksum": np.array(self._checksum(info_json)),
         }
-        folder = os.path.dirname(os.path.abspath(path))
-        fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".npz", dir=folder)
-        try:
-            with os.fdopen(fd, "wb") as fh:
-                np.savez(fh, **arrays)
-            os.replace(tmp, path)
-        except BaseException:
-            if os.path.exists(tmp):
-                os.unlink(tmp)
-            raise
+        atomic_npz(path, **arrays)
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> StableDS:

@@ -30,11 +30,11 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from ._io import atomic_npz
 from .ball import CLUB_MASS, MU_SLIDE, RESTITUTION, G, impact, simulate_shots
 from .fields import Field, load_field
 
@@ -398,19 +398,10 @@ class HittingDataset:
 
     def save(self, path: str | os.PathLike) -> None:
         """Write an ``.npz`` file (atomic; no pickle)."""
-        path = os.fspath(path)
-        folder = os.path.dirname(os.path.abspath(path))
-        fd, tmp = tempfile.mkstemp(suffix=".npz", dir=folder)
-        os.close(fd)
-        try:
-            np.savez(tmp, ball=self.ball, hole=self.hole, alpha=self.alpha, kappa=self.kappa,
-                     meta=np.array(json.dumps({"field": self.field, "strategy": self.strategy,
-                                               "dropped": self.dropped,
-                                               "stroke": self.stroke.to_dict()})))
-            os.replace(tmp, path)
-        finally:
-            if os.path.exists(tmp):
-                os.remove(tmp)
+        atomic_npz(path, ball=self.ball, hole=self.hole, alpha=self.alpha, kappa=self.kappa,
+                   meta=np.array(json.dumps({"field": self.field, "strategy": self.strategy,
+                                             "dropped": self.dropped,
+                                             "stroke": self.stroke.to_dict()})))
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> HittingDataset:
