@@ -37,7 +37,8 @@ from .motion import HittingMotion, rotation_z
 from .robots import Robot
 
 __all__ = ["SwingController", "SwingResult", "Gains", "simulate_swing", "place_head",
-           "default_base", "place_robot", "gravity_ratio", "face_orientation"]
+           "default_base", "place_robot", "gravity_ratio", "face_orientation",
+           "effective_mass"]
 
 
 def _log3(R: np.ndarray) -> np.ndarray:
@@ -62,6 +63,21 @@ def orientation_error(R: np.ndarray, Rd: np.ndarray, full: bool) -> np.ndarray:
     if full:
         return _log3(Rd @ R.T)
     return np.cross(R[:, 0], Rd[:, 0])
+
+
+def effective_mass(robot: Robot, q, direction) -> float:
+    """The arm's effective mass at the club face along ``direction`` (field frame):
+    1 / (n^T J M(q)^-1 J^T n), J the face point's linear Jacobian, M the joint-space inertia
+    (club included). A short impact sees this mass (the torques change little in 1 ms)."""
+    import pinocchio as pin
+
+    q = np.asarray(q, float)
+    M = pin.crba(robot.model, robot.data, q)
+    M = np.triu(M) + np.triu(M, 1).T
+    J = robot.head_jacobian(q)[:3]
+    n = np.asarray(direction, float) / np.linalg.norm(direction)
+    Jn = n @ J
+    return float(1.0 / (Jn @ np.linalg.solve(M, Jn)))
 
 
 def gravity_ratio(robot: Robot, q) -> float:
@@ -343,6 +359,9 @@ class SwingResult:
         Wall time of each control tick [us] (the controller only, not the simulation).
     face_normal : array (3,)
         The club face's normal at the hit (for :func:`seds_casadi.ball.impact`).
+    effective_mass : float
+        The arm's mass as the ball feels it at the face along its normal at the hit
+        (:func:`effective_mass`; the impact model's club mass for this robot).
     """
 
     t: np.ndarray
@@ -358,6 +377,7 @@ class SwingResult:
     limits_ok: bool = True
     tick_us: np.ndarray = field(default_factory=lambda: np.zeros(0))
     face_normal: np.ndarray = field(default_factory=lambda: np.full(3, np.nan))
+    effective_mass: float = np.nan
 
     @property
     def direction_error_deg(self) -> float:
@@ -500,7 +520,7 @@ def simulate_swing(robot: Robot, motion: HittingMotion, ball, alpha: float = 0.0
     events = sorted(perturb or [], key=lambda e: e["t"])
     T, Q, QD, TAU, X, TICK = [], [], [], [], [], []
     t, t_end = 0.0, max_time
-    hit_v = v_prev = hit_n = None
+    hit_v = v_prev = hit_n = hit_m = None
     ei = 0
     while t < t_end - 1e-12:
         while ei < len(events) and events[ei]["t"] <= t + 1e-12:
@@ -522,6 +542,7 @@ def simulate_swing(robot: Robot, motion: HittingMotion, ball, alpha: float = 0.0
             lam = float(ctl.hit["lam"])
             hit_v = v_now if v_prev is None else v_prev + lam * (v_now - v_prev)
             hit_n = robot.head_pose(q)[1][:, 0]
+            hit_m = effective_mass(robot, q, hit_n)
             t_end = t + rest_time
         v_prev = v_now
         x, _ = robot.head_pose(q)
@@ -552,5 +573,6 @@ def simulate_swing(robot: Robot, motion: HittingMotion, ball, alpha: float = 0.0
         res.hit_time = ctl.hit["t"]
         res.hit_velocity = hit_v
         res.face_normal = hit_n
+        res.effective_mass = hit_m
         res.commanded = ctl.hit["commanded"]
     return res

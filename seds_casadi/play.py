@@ -70,7 +70,8 @@ def play_shot(task: dict) -> dict:
         return row
     if not swing.hit:
         return row
-    launch = impact(swing.hit_velocity[None], face_normal=swing.face_normal[None])
+    launch = impact(swing.hit_velocity[None], face_normal=swing.face_normal[None],
+                    club_mass=swing.effective_mass)
     res = simulate_shots(field, ball[None], launch, hole=hole, engine="numpy", record_paths=True)
     row.update(hit=True, sunk=bool(res.sunk[0]),
                direction_error_deg=swing.direction_error_deg, speed_error=swing.speed_error,

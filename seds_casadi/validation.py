@@ -448,8 +448,10 @@ def validate(robot_name: str = "wam", field_name: str = "flat", shots: int = 10,
             paths.append(None)
             continue
         vc = swing.hit_velocity
-        # the face as the robot holds it (a five-joint arm cannot keep it square)
-        launch = impact(vc[None], face_normal=swing.face_normal[None])
+        # the face as the robot holds it (five joints cannot keep it square) and the arm's
+        # effective mass at the face
+        launch = impact(vc[None], face_normal=swing.face_normal[None],
+                        club_mass=swing.effective_mass)
         fast = simulate_shots(fld, ball[None], launch, hole=hole, engine="numpy",
                               record_paths=True)
         # the same swing in exudyn: the arm as a kinematic tree under the same controller,

@@ -261,3 +261,21 @@ def test_start_is_placed_behind_the_ball_facing_the_hit(motion):
     x, R = r.head_pose(q)
     np.testing.assert_allclose(x, target, atol=1e-3)
     assert R[:, 0] @ d > np.cos(np.deg2rad(2))
+
+
+def test_effective_mass_at_the_face_matches_the_inverse_inertia():
+    from seds_casadi.control import effective_mass
+
+    r = load_robot("wam")
+    for _ in range(3):
+        q = _random_q(r)
+        n = RNG.normal(size=3)
+        n /= np.linalg.norm(n)
+        m = effective_mass(r, q, n)
+        Minv = pin.computeMinverse(r.model, r.data, q)
+        Minv = np.triu(Minv) + np.triu(Minv, 1).T
+        J = r.head_jacobian(q)[:3]
+        assert m == pytest.approx(1.0 / (n @ J @ Minv @ J.T @ n), rel=1e-9)
+        assert effective_mass(r, q, -n) == pytest.approx(m)
+        # a plausible range: above half the head's 0.3 kg, below the whole arm with its club
+        assert 0.3 * 0.5 < m < sum(i.mass for i in r.model.inertias)
