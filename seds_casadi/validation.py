@@ -113,6 +113,12 @@ class ExudynShot:
     head_speed : array (k, 2)
         Club-head speed around the impact: t, |v|.
     simulated_time, wall_time : float
+    hit : bool
+        The club touched the ball (False: a miss, e.g. a swing too slow to arrive).
+    head_velocity : array (3,)
+        Club-head velocity at the first contact (NaN without one).
+    contact_time : float
+        When the club first touched the ball [s] (NaN without contact).
     """
 
     sunk: bool
@@ -123,7 +129,9 @@ class ExudynShot:
     head_speed: np.ndarray
     simulated_time: float
     wall_time: float
-    events: list = field(default_factory=list)
+    hit: bool = False
+    head_velocity: np.ndarray = field(default_factory=lambda: np.full(3, np.nan))
+    contact_time: float = np.nan
 
     @property
     def real_time_factor(self) -> float:
@@ -372,12 +380,10 @@ def simulate_shot_exudyn(field: Field, ball_xy, club_velocity=None, hole=None,
     p = np.asarray(mbs.GetNodeOutput(ball_node, exu.OutputVariableType.Position))
     t_end = path[-1][0] if path else 0.0
     launch = state["launch"] if state["launch"] is not None else np.zeros(2)
-    shot = ExudynShot(state["sunk"], state["stopped"], p[:2].copy(), launch, np.array(path),
-                      np.array(heads), t_end, wall)
-    shot.hit = state["launch"] is not None
-    shot.head_velocity = state.get("head_velocity", np.full(3, np.nan))
-    shot.contact_time = state.get("contact_time", np.nan)
-    return shot
+    return ExudynShot(state["sunk"], state["stopped"], p[:2].copy(), launch, np.array(path),
+                      np.array(heads), t_end, wall, hit=state["launch"] is not None,
+                      head_velocity=state.get("head_velocity", np.full(3, np.nan)),
+                      contact_time=state.get("contact_time", np.nan))
 
 
 VALIDATION_COLUMNS = ("field", "robot", "shot", "sunk_fast", "sunk_exudyn",
