@@ -27,13 +27,14 @@ Model (per unit mass; horizontal position p = (x, y), horizontal velocity u; g =
 * **Impact** (club head to ball, along the club's velocity): v_ball = (1 + e) m_c / (m_c + m_b)
   v_club, with an effective club-head mass m_c = 0.35 kg and restitution e = 0.8 (a putter face).
 
-Integration: a fixed step (default 5 ms): velocity by explicit Euler, position by the trapezoid
+Integration: a fixed step (default 10 ms): velocity by explicit Euler, position by the trapezoid
 rule (exact for a constant deceleration), the hole test on the step's segment so that a fast
 ball cannot jump over it.
 
 Two engines share exactly these equations: ``"numpy"``, the readable reference (also records
-paths), and ``"compiled"``, the same step written in CasADi, looped in C and mapped over shots
-on threads (:class:`BallKernel`), 20-40x faster. Surfaces whose exact evaluation is expensive
+paths), and ``"compiled"``, the same step written in CasADi and run in C over many shots on two
+threads (:class:`BallKernel`; by default as a vectorised loop generated from the CasADi step,
+:mod:`seds_casadi.simd`), 17-20x faster on analytic fields. Surfaces whose exact evaluation is expensive
 ("rough": hundreds of bumps; "heightmap": a spline) are read by the compiled engine from a table
 of derivatives on a 1 cm grid (:meth:`Surface.table`), interpolated linearly.
 """
@@ -302,8 +303,15 @@ def ball_kernel(field: Field, dt: float = 0.01) -> BallKernel:
 
 
 class BallKernel:
-    """The ball model's step in CasADi, looped ``steps_per_call`` times in compiled C and mapped
-    over batches of shots on two threads. Same equations as the numpy engine (module docstring).
+    """The ball model's step in CasADi, run in compiled C over many shots on two threads. Same
+    equations as the numpy engine (module docstring).
+
+    Two backends run the same CasADi SX step: ``"simd"`` translates it into a C loop over
+    blocks of 64 shots that the compiler vectorises (AVX2: four shots per instruction) and that
+    stops a block once all its shots are finished (:mod:`seds_casadi.simd`); ``"casadi"`` loops
+    it ``steps_per_call`` times in CasADi's generated C and maps that over batches of shots
+    (used when the step cannot be translated, e.g. a tabulated surface's interpolant call, or
+    no compiler works). ``"auto"`` picks simd when it can.
 
     The state of a shot is (x, y, u_x, u_y, slip_x, slip_y, status, time, hole x, hole y) with
     status 0 while moving, 1 sunk, 2 out, 3 stopped; finished shots are frozen. Between calls
@@ -318,20 +326,48 @@ class BallKernel:
         Steps per compiled call (1 s of play at the default step).
     batches : (int, int)
         Shots per compiled call: large batches for the bulk of the shots, small ones for the
-        rest (so that 30 shots do not cost a large batch).
+        rest (so that 30 shots do not cost a large batch). CasADi backend.
+    backend : {"auto", "simd", "casadi"}
     """
 
     def __init__(self, field: Field, dt: float = 0.01, steps_per_call: int = 100,
-                 batches: tuple[int, int] = (1024, 32)) -> None:
+                 batches: tuple[int, int] = (1024, 32), backend: str = "auto") -> None:
+        import casadi as ca
+
+        if not (np.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt must be positive, got {dt}")
+        if backend not in ("auto", "simd", "casadi"):
+            raise ValueError(f"backend must be 'auto', 'simd' or 'casadi', got {backend!r}")
+        self.field, self.dt = field, float(dt)
+        self.steps_per_call = int(steps_per_call)
+        self.batches = (int(batches[0]), int(batches[1]))
+        self._simd = None
+        self.simd_error = None
+        if backend in ("auto", "simd"):
+            from .simd import SimdLoop, UnsupportedOperation
+
+            try:
+                if field.surface.tabulated:
+                    step, lookup, table = self._step(ca, tabulated_input=True)
+                else:
+                    step, lookup, table = self._step(ca), None, None
+                self._simd = SimdLoop(step, "ball_steps", done_index=6, lookup=lookup,
+                                      table=table)
+            except (UnsupportedOperation, RuntimeError) as exc:
+                if backend == "simd":
+                    raise
+                self.simd_error = str(exc)
+        self.backend = "simd" if self._simd is not None else "casadi"
+        self._big = self._small = None
+        self.compiled = True
+        if self._simd is None:
+            self._build_casadi()
+
+    def _build_casadi(self) -> None:
         import casadi as ca
 
         from .kernels import compile_functions
 
-        if not (np.isfinite(dt) and dt > 0):
-            raise ValueError(f"dt must be positive, got {dt}")
-        self.field, self.dt = field, float(dt)
-        self.steps_per_call = int(steps_per_call)
-        self.batches = (int(batches[0]), int(batches[1]))
         step = self._step(ca)
         s = ca.MX.sym("s", 10)
         x = s
@@ -343,12 +379,23 @@ class BallKernel:
         self._big, self._small = compile_functions([big, small], ("-O2",))
         self.compiled = self._big.class_name() == "External"
 
-    def _step(self, ca):
+    def _step(self, ca, tabulated_input: bool = False):
+        """The step as an SX Function of the state. With ``tabulated_input`` (tabulated
+        surfaces), the surface's table values are a second input instead of an interpolant
+        call; returns (step, lookup, table) for :class:`seds_casadi.simd.SimdLoop`."""
         f, dt, r = self.field, self.dt, BALL_RADIUS
         mg = MU_SLIDE * G
         s = ca.SX.sym("s", 10)
         p, u, sl, status, t = s[0:2], s[2:4], s[4:6], s[6], s[7]
-        grad, hess, fr = f.surface.casadi_terms(p, f.bounds)
+        if tabulated_input:
+            (xs, ys), values = f.surface.table(f.bounds)
+            aux = ca.SX.sym("aux", 6)
+            grad, fr = aux[0:2], aux[5]
+            hess = ca.vertcat(ca.horzcat(aux[2], aux[3]), ca.horzcat(aux[3], aux[4]))
+            lookup = dict(ix=0, iy=1, x0=xs[0], dx=xs[1] - xs[0], nx=len(xs), y0=ys[0],
+                          dy=ys[1] - ys[0], ny=len(ys), channels=6)
+        else:
+            grad, hess, fr = f.surface.casadi_terms(p, f.bounds)
         curv = ca.mtimes([u.T, hess, u])
         s2 = 1 + ca.dot(grad, grad)
         s_mag = ca.norm_2(sl)
@@ -400,7 +447,10 @@ class BallKernel:
         new_status = ca.if_else(drop, 1, ca.if_else(lost, 2, ca.if_else(rest, 3, 0)))
         new = ca.vertcat(pos[0], pos[1], vel[0], vel[1], slip[0], slip[1], new_status, t + dt,
                          hole)
-        return ca.Function("ball_step", [s], [ca.if_else(status == 0, new, s)])
+        out = ca.if_else(status == 0, new, s)
+        if tabulated_input:
+            return ca.Function("ball_step", [s, aux], [out]), lookup, values
+        return ca.Function("ball_step", [s], [out])
 
     def run(self, P: np.ndarray, U: np.ndarray, max_time: float = 20.0,
             hole: np.ndarray | None = None) -> ShotResult:
@@ -413,6 +463,19 @@ class BallKernel:
         S[0:2] = P.T
         S[2:4] = U.T
         S[4:6] = U.T  # no spin at the impact: the contact point slips at the ball's speed
+        if self._simd is not None:
+            # blocks stop once all their shots are done; between calls the finished shots are
+            # dropped so that the blocks stay full of moving ones
+            left = int(np.ceil(max_time / self.dt - 1e-9))
+            active = np.arange(n)
+            while active.size and left > 0:
+                k = min(left, self.steps_per_call)
+                X = np.ascontiguousarray(S[:, active])
+                self._simd.run(X, k)
+                S[:, active] = X
+                left -= k
+                active = active[X[6] == 0]
+            return self._result(S, max_time)
         active = np.arange(n)
         nb, ns = self.batches
         t_call = self.steps_per_call * self.dt
@@ -431,6 +494,10 @@ class BallKernel:
             S[:, active] = out[:, :active.size]
             elapsed += t_call
             active = active[S[6, active] == 0]
+        return self._result(S, max_time)
+
+    @staticmethod
+    def _result(S: np.ndarray, max_time: float) -> ShotResult:
         # a shot still rolling at the limit, or past it within the last call
         over = (S[7] > max_time + 1e-9) | (S[6] == 0)
         status = np.where(over, 0, S[6]).astype(int)

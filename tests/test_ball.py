@@ -263,3 +263,51 @@ def test_impact_with_a_turned_face_leaves_along_its_normal():
     assert np.linalg.norm(out) == pytest.approx(np.linalg.norm(square) * np.cos(th))
     with pytest.raises(ValueError, match="3-D"):
         impact([1.0, 0.0], face_normal=[1.0, 0.0, 0.0])
+
+
+@pytest.mark.parametrize("name", ["flat", "double_hill", "arctan", "rough_flat"])
+def test_simd_backend_equals_the_casadi_kernel(name):
+    # the vectorised C loop is generated from the same SX step as CasADi's kernel
+    from seds_casadi.ball import BallKernel
+
+    f = load_field(name)
+    B, V = _aimed_shots(f, 700, 5)  # > 2 x 256: both threads, blocks of 64 and a remainder
+    simd = BallKernel(f, backend="simd")
+    assert simd.backend == "simd"
+    a = simd.run(B, V, 20.0)
+    b = BallKernel(f, backend="casadi").run(B, V, 20.0)
+    np.testing.assert_array_equal(a.sunk, b.sunk)
+    np.testing.assert_array_equal(a.stopped, b.stopped)
+    np.testing.assert_allclose(a.final_position, b.final_position, atol=1e-9)
+    np.testing.assert_allclose(a.time, b.time, atol=1e-9)
+    # shots still moving at the time limit are reported as such by both
+    c = simd.run(B[:50], V[:50], 0.3)
+    assert not (c.sunk | c.stopped | c.out).any() and np.all(c.time == 0.3)
+    with pytest.raises(ValueError, match="backend"):
+        BallKernel(f, backend="gpu")
+
+
+def test_simd_translator_against_casadi_on_random_states():
+    import casadi as ca
+
+    from seds_casadi.simd import SimdLoop, UnsupportedOperation
+
+    x = ca.SX.sym("x", 4)
+    y = ca.vertcat(ca.if_else(x[0] < x[1], ca.sqrt(ca.fabs(x[2])), -x[3]),
+                   ca.fmin(x[0], x[1]) * ca.exp(-x[2] ** 2) + x[3] / (1 + x[1] ** 2),
+                   ca.atan(x[0]) - ca.tanh(x[1]) + ca.fmax(x[2], 0.5),
+                   ca.logic_or(x[2] > 0, ca.logic_not(x[3] <= 1)) * 2.0)
+    f = ca.Function("g", [x], [y])
+    loop = SimdLoop(f, "g_loop")
+    S = np.random.default_rng(1).normal(size=(4, 301))
+    ref = S.copy()
+    for _ in range(3):
+        ref = np.asarray(f.map(ref.shape[1])(ref))
+    loop.run(S, 3)
+    np.testing.assert_allclose(S, ref, rtol=1e-12, atol=1e-12)
+    with pytest.raises(ValueError, match="C-contiguous"):
+        loop.run(S.T, 1)
+    g = ca.Function("h", [x], [ca.interpolant("t", "linear", [[0.0, 1.0, 2.0]],
+                                              [0.0, 1.0, 4.0])(x[0]) * x])
+    with pytest.raises(UnsupportedOperation, match="not translated|SX"):
+        SimdLoop(g, "h_loop")
