@@ -13,7 +13,8 @@ and the two are compared (``seds-casadi validate``).
   with whatever the arm's inertia and the controller give, not the fast model's formula.
   Face-ball contact damping is set for a restitution of 0.8.
 * **Field**: a triangle mesh of z = H(x, y) (:func:`field_mesh`, normals up), plus vertical wall
-  strips (damped for the field's wall restitution) on fields with walls. Ball-field contact is
+  strips (damped for the field's wall restitution, frictionless as in the fast model, so the
+  wall's impulse leaves the ball's spin alone) on fields with walls. Ball-field contact is
   exudyn's sphere-triangle contact with Coulomb friction (mu = 0.2): the skid after the impact
   and its turn into rolling come out of the contact.
 * **Rolling resistance**: exudyn's contact has Coulomb friction only, so a force rho m g (times
@@ -174,8 +175,10 @@ def simulate_shot_exudyn(field: Field, ball_xy, club_velocity=None, hole=None,
     m_ground = mbs.AddMarker(MarkerBodyRigid(bodyNumber=ground))
     gc = mbs.AddGeneralContact()
     gc.verboseMode = 0
-    # materials: 0 field, 1 ball, 2 club head
-    mu = np.array([[0.0, MU_SLIDE, 0.0], [MU_SLIDE, 0.0, 0.0], [0.0, 0.0, 0.0]])
+    # materials: 0 field, 1 ball, 2 club head, 3 walls (frictionless, as in the fast model:
+    # the wall's normal impulse passes through the ball's centre and leaves its spin alone)
+    mu = np.zeros((4, 4))
+    mu[0, 1] = mu[1, 0] = MU_SLIDE
     gc.SetFrictionPairings(mu)
     b = field.bounds
     gc.SetSearchTreeBox(pMin=[b[0] - 0.1, b[2] - 0.1, -1.0], pMax=[b[1] + 0.1, b[3] + 0.1, 1.0])
@@ -202,7 +205,7 @@ def simulate_shot_exudyn(field: Field, ball_xy, club_velocity=None, hole=None,
         wp, wt = _walls(field)
         gc.AddTrianglesRigidBodyBased(rigidBodyMarkerIndex=m_ground, contactStiffness=k_field,
                                       contactDamping=2 * zeta_w * np.sqrt(4e4 * BALL_MASS),
-                                      frictionMaterialIndex=0,
+                                      frictionMaterialIndex=3,
                                       pointList=wp.tolist(), triangleList=wt.tolist(),
                                       staticTriangles=True)
     z0 = float(field.surface.height(ball_xy[None])[0])
