@@ -311,3 +311,21 @@ def test_simd_translator_against_casadi_on_random_states():
                                               [0.0, 1.0, 4.0])(x[0]) * x])
     with pytest.raises(UnsupportedOperation, match="not translated|SX"):
         SimdLoop(g, "h_loop")
+
+
+@pytest.mark.parametrize("e", [0.6, 0.9])
+def test_a_rolling_ball_comes_off_a_wall_at_five_e_minus_two_sevenths(e):
+    # the wall reverses the velocity, not the spin: after the ground friction has brought the
+    # ball back to rolling, it moves away at (5e - 2)/7 of its rolling speed (a known answer of
+    # rigid-ball mechanics; e v_n if the spin were reversed too)
+    f = _field({"shape": "plane", "slope_x": 0.0, "slope_y": 0.0}, rho=0.0, hole=(0.5, 0.5),
+               bounds=[-0.3, 1.0, -0.6, 0.6], ball_region=[-0.1, 0.3, -0.45, 0.45],
+               wall_restitution=e)
+    v0, dt = 1.0, 0.001
+    res = simulate_shots(f, [[0.0, -0.3]], [[v0, 0.0]], dt=dt, max_time=2.0,
+                         record_paths=True)
+    x = res.paths[0][:, 0]
+    v_end = (x[-1] - x[-101]) / (100 * dt)
+    assert v_end == pytest.approx(-(5 * e - 2) / 7 * (5 / 7 * v0), rel=0.02)
+    fast = simulate_shots(f, [[0.0, -0.3]], [[v0, 0.0]], dt=dt, max_time=2.0, engine="compiled")
+    assert fast.final_position[0, 0] == pytest.approx(x[-1], abs=1e-9)
