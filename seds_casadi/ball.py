@@ -105,6 +105,8 @@ class ShotResult:
         When the shot ended (sunk, out or stopped), or the time limit.
     paths : list of array (T, 2) or None
         Ball paths when requested.
+    wall_contacts : array of int, shape (n,)
+        How often each ball hit a wall.
     """
 
     sunk: np.ndarray
@@ -113,6 +115,7 @@ class ShotResult:
     final_position: np.ndarray
     time: np.ndarray
     paths: list | None = None
+    wall_contacts: np.ndarray | None = None
 
     @property
     def success_rate(self) -> float:
@@ -200,6 +203,7 @@ def simulate_shots(field: Field, ball_xy, launch_velocity, dt: float = 0.01,
     out = np.zeros(n, bool)
     stopped = np.zeros(n, bool)
     t_end = np.full(n, max_time)
+    walls = np.zeros(n, int)
     paths = [[p.copy()] for p in P] if record_paths else None
     b = field.bounds
     r = BALL_RADIUS
@@ -249,6 +253,7 @@ def simulate_shots(field: Field, ball_xy, launch_velocity, dt: float = 0.01,
                 new_p[low, j] = 2 * (lo + r) - new_p[low, j]
                 new_p[high, j] = 2 * (hi - r) - new_p[high, j]
                 hit = low | high
+                walls[idx[hit]] += 1
                 # the wall turns the velocity, not the spin: the contact point with the ground
                 # then slips at (1 + e) times the normal speed, and friction brings the ball
                 # back to rolling (a rolling ball comes off a wall slower than e v_n)
@@ -273,7 +278,7 @@ def simulate_shots(field: Field, ball_xy, launch_velocity, dt: float = 0.01,
             for i in idx:
                 paths[i].append(P[i].copy())
     return ShotResult(sunk, out, stopped, P, t_end,
-                      [np.array(q) for q in paths] if record_paths else None)
+                      [np.array(q) for q in paths] if record_paths else None, walls)
 
 
 def _holes(field: Field, hole, n: int) -> np.ndarray:
@@ -320,9 +325,9 @@ class BallKernel:
     (used when the step cannot be translated, e.g. a tabulated surface's interpolant call, or
     no compiler works). ``"auto"`` picks simd when it can.
 
-    The state of a shot is (x, y, u_x, u_y, slip_x, slip_y, status, time, hole x, hole y) with
-    status 0 while moving, 1 sunk, 2 out, 3 stopped; finished shots are frozen. Between calls
-    the finished shots are dropped, so a batch costs what its longest shot needs.
+    The state of a shot is (x, y, u_x, u_y, slip_x, slip_y, status, time, hole x, hole y, wall
+    contacts) with status 0 while moving, 1 sunk, 2 out, 3 stopped; finished shots are frozen.
+    Between calls the finished shots are dropped, so a batch costs what its longest shot needs.
 
     Parameters
     ----------
@@ -376,7 +381,7 @@ class BallKernel:
         from .kernels import compile_functions
 
         step = self._step(ca)
-        s = ca.MX.sym("s", 10)
+        s = ca.MX.sym("s", 11)
         x = s
         for _ in range(self.steps_per_call):
             x = step(x)
@@ -392,7 +397,7 @@ class BallKernel:
         call; returns (step, lookup, table) for :class:`seds_casadi.simd.SimdLoop`."""
         f, dt, r = self.field, self.dt, BALL_RADIUS
         mg = MU_SLIDE * G
-        s = ca.SX.sym("s", 10)
+        s = ca.SX.sym("s", 11)
         p, u, sl, status, t = s[0:2], s[2:4], s[4:6], s[6], s[7]
         if tabulated_input:
             (xs, ys), values = f.surface.table(f.bounds)
@@ -437,11 +442,12 @@ class BallKernel:
         cap = 2 * ca.sqrt(ca.fmax(R**2 - off**2, 0.0)) / np.sqrt(2 * r / G)
         drop = ca.logic_and(off < R, ca.norm_2(nu) < cap)
         b = f.bounds
-        pos, vel, slip, lost = [], [], [], 0
+        pos, vel, slip, lost, n_hit = [], [], [], 0, s[10]
         for j, (lo, hi) in enumerate(((b[0], b[1]), (b[2], b[3]))):
             low, high = npos[j] < lo + r, npos[j] > hi - r
             if f.boundary == "walls":
                 hit = ca.logic_or(low, high)
+                n_hit = n_hit + hit
                 pos.append(ca.if_else(low, 2 * (lo + r) - npos[j],
                                       ca.if_else(high, 2 * (hi - r) - npos[j], npos[j])))
                 vel.append(ca.if_else(hit, -f.wall_restitution * nu[j], nu[j]))
@@ -454,7 +460,7 @@ class BallKernel:
                 lost = ca.logic_or(lost, ca.logic_or(npos[j] < lo, npos[j] > hi))
         new_status = ca.if_else(drop, 1, ca.if_else(lost, 2, ca.if_else(rest, 3, 0)))
         new = ca.vertcat(pos[0], pos[1], vel[0], vel[1], slip[0], slip[1], new_status, t + dt,
-                         hole)
+                         hole, n_hit)
         out = ca.if_else(status == 0, new, s)
         if tabulated_input:
             return ca.Function("ball_step", [s, aux], [out]), lookup, values
@@ -466,7 +472,7 @@ class BallKernel:
         ``hole`` (n, 2; default the field's). Inputs are not validated here: use
         :func:`simulate_shots`."""
         n = len(P)
-        S = np.zeros((10, n))
+        S = np.zeros((11, n))
         S[8:10] = (np.tile(self.field.hole, (n, 1)) if hole is None else hole).T
         S[0:2] = P.T
         S[2:4] = U.T
@@ -491,7 +497,7 @@ class BallKernel:
         while active.size and elapsed < max_time - 1e-12:
             n_big = (active.size // nb) * nb
             m = n_big + int(np.ceil((active.size - n_big) / ns)) * ns
-            X = np.zeros((10, m))
+            X = np.zeros((11, m))
             X[6] = 1.0  # padding: frozen
             X[:, :active.size] = S[:, active]
             out = np.empty_like(X)
@@ -510,4 +516,4 @@ class BallKernel:
         over = (S[7] > max_time + 1e-9) | (S[6] == 0)
         status = np.where(over, 0, S[6]).astype(int)
         return ShotResult(status == 1, status == 2, status == 3, S[0:2].T.copy(),
-                          np.where(over, max_time, S[7]))
+                          np.where(over, max_time, S[7]), None, S[10].astype(int))

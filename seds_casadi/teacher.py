@@ -107,7 +107,7 @@ class Stroke:
 
 
 def success_map(field: Field, stroke: Stroke, ball, hole, alphas, kappas,
-                engine: str = "auto") -> np.ndarray:
+                engine: str = "auto", banks: bool = True) -> np.ndarray:
     """Fig. 4a: whether each (alpha, kappa) of a grid sinks the ball.
 
     Parameters
@@ -119,6 +119,8 @@ def success_map(field: Field, stroke: Stroke, ball, hole, alphas, kappas,
         Hitting angles [rad].
     kappas : array, shape (n_kappa,)
         Speed gains.
+    banks : bool, default True
+        Count shots that touch a wall before they sink (False: only direct shots succeed).
 
     Returns
     -------
@@ -130,7 +132,8 @@ def success_map(field: Field, stroke: Stroke, ball, hole, alphas, kappas,
     V = stroke.launch_velocity(A.ravel(), K.ravel())
     res = simulate_shots(field, np.tile(np.asarray(ball, float), (len(V), 1)), V, hole=hole,
                          engine=engine)
-    return res.sunk.reshape(K.shape)
+    ok = res.sunk if banks else res.sunk & (res.wall_contacts == 0)
+    return ok.reshape(K.shape)
 
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
@@ -178,6 +181,10 @@ class Teacher:
         Speed gains searched (``"minimal_speed"``).
     resolution : (int, int)
         Grid of the search (angles, gains); the angle is refined around the choice.
+    banks : bool, default False
+        Whether shots off a wall count as good shots. The paper's teacher played direct shots;
+        bank shots are a different strategy (on the arctan field the slowest hits are often
+        banks, and a data set that mixes them with direct shots cannot be learned, Fig. 4b).
     """
 
     field: Field
@@ -188,6 +195,7 @@ class Teacher:
     kappa_range: tuple = (0.8, 2.4)
     resolution: tuple = (161, 65)
     engine: str = "auto"
+    banks: bool = False
     _fixed: float = field(init=False, default=0.0, repr=False)
 
     def __post_init__(self) -> None:
@@ -235,7 +243,7 @@ class Teacher:
         aim = float(self.stroke.aim(hole - ball)[0])
         if self.strategy == "fixed_speed":
             row = success_map(self.field, self.stroke, ball, hole, alphas, [self._fixed],
-                              self.engine)[0]
+                              self.engine, self.banks)[0]
             runs = _runs(row)
             if not runs:
                 return np.nan, np.nan
@@ -244,7 +252,8 @@ class Teacher:
             a0, b0 = runs[int(np.argmin([abs(m - goal) for m in mids]))]
             return self._refine(ball, hole, alphas, a0, b0, self._fixed), self._fixed
         kappas = np.linspace(*self.kappa_range, n_k)
-        M = success_map(self.field, self.stroke, ball, hole, alphas, kappas, self.engine)
+        M = success_map(self.field, self.stroke, ball, hole, alphas, kappas, self.engine,
+                        self.banks)
         if not M.any():
             return np.nan, np.nan
         lab = _components(M)
@@ -279,7 +288,7 @@ class Teacher:
         lo = np.linspace(alphas[a0] - step, alphas[a0], 11)
         hi = np.linspace(alphas[b0 - 1], alphas[b0 - 1] + step, 11)
         ok = success_map(self.field, self.stroke, ball, hole, np.concatenate([lo, hi]), [kappa],
-                         self.engine)[0]
+                         self.engine, self.banks)[0]
         left = lo[np.argmax(ok[:11])] if ok[:11].any() else alphas[a0]
         right = hi[10 - np.argmax(ok[11:][::-1])] if ok[11:].any() else alphas[b0 - 1]
         return float(0.5 * (left + right))

@@ -29,8 +29,10 @@ and the two are compared (``seds-casadi validate``).
   sphere of the impact model's effective mass (0.35 kg) strikes the ball, braked after the
   contact: a check of the impact and rolling models alone.
 
-Integration: explicit 4th-order Runge-Kutta with Lie-group rotations, step 0.2 ms (14 steps per
-period of the stiffest contact, face on ball).
+Integration: Dormand-Prince 5(4) with Lie-group rotations and automatic steps (tolerance 1e-7,
+at most 0.2 ms). A fixed 0.2 ms Runge-Kutta 4 step (14 steps per period of the stiffest
+contact, face on ball) lost up to 2 % of the ball's launch speed in the impact, depending on
+where the contact fell between steps; the adaptive steps shorten only around contacts.
 """
 
 from __future__ import annotations
@@ -141,7 +143,7 @@ class ExudynShot:
 
 
 def simulate_shot_exudyn(field: Field, ball_xy, club_velocity=None, hole=None,
-                         max_time: float = 12.0, step: float = 2e-4,
+                         max_time: float = 12.0, step: float = 2e-4, tolerance: float = 1e-7,
                          mesh_spacing: float | None = None, gap: float = 0.01,
                          restitution: float = RESTITUTION, arm: dict | None = None
                          ) -> ExudynShot:
@@ -155,8 +157,9 @@ def simulate_shot_exudyn(field: Field, ball_xy, club_velocity=None, hole=None,
     torques every 2 ms from exudyn's joint state, and the ball is struck by a contact sphere at
     the club face on its last link: the impact then involves the whole arm, not a formula.
 
-    Raises ``RuntimeError`` naming the time when exudyn's solver fails (never a silently
-    truncated result).
+    ``step`` is the largest integration step [s] and ``tolerance`` the step control's absolute
+    and relative tolerance. Raises ``RuntimeError`` naming the time when exudyn's solver fails
+    (never a silently truncated result).
     """
     import time
 
@@ -364,7 +367,10 @@ def simulate_shot_exudyn(field: Field, ball_xy, club_velocity=None, hole=None,
     so = exu.SimulationSettings()
     with warnings.catch_warnings():  # exudyn renamed some settings; the old names still work
         warnings.simplefilter("ignore", DeprecationWarning)
-        so.timeIntegration.numberOfSteps = int(np.ceil(max_time / step))
+        so.timeIntegration.numberOfSteps = int(np.ceil(max_time / step))  # the largest step
+        so.timeIntegration.automaticStepSize = True
+        so.timeIntegration.absoluteTolerance = tolerance
+        so.timeIntegration.relativeTolerance = tolerance
         so.timeIntegration.endTime = max_time
         so.timeIntegration.explicitIntegration.useLieGroupIntegration = True
         so.timeIntegration.verboseMode = 0
@@ -373,7 +379,7 @@ def simulate_shot_exudyn(field: Field, ball_xy, club_velocity=None, hole=None,
     t0 = time.perf_counter()
     exu.SetWriteToConsole(False)  # its note on per-step allocations by user functions
     try:
-        exu.SolveDynamic(mbs, so, solverType=exu.DynamicSolverType.RK44)
+        exu.SolveDynamic(mbs, so, solverType=exu.DynamicSolverType.DOPRI5)
     except Exception as exc:  # noqa: BLE001 - exudyn raises its own error types
         t_fail = path[-1][0] if path else 0.0
         raise RuntimeError(f"exudyn failed near t = {t_fail:.3f} s of the shot: {exc}") from None
