@@ -329,3 +329,25 @@ def test_a_rolling_ball_comes_off_a_wall_at_five_e_minus_two_sevenths(e):
     assert v_end == pytest.approx(-(5 * e - 2) / 7 * (5 / 7 * v0), rel=0.02)
     fast = simulate_shots(f, [[0.0, -0.3]], [[v0, 0.0]], dt=dt, max_time=2.0, engine="compiled")
     assert fast.final_position[0, 0] == pytest.approx(x[-1], abs=1e-9)
+
+
+def test_wall_contacts_are_counted_and_banks_can_be_left_out_of_a_success_map():
+    from seds_casadi.teacher import Stroke, success_map
+
+    f = _plane(rho=0.0785)
+    # straight into the side wall at y = 0.6, and straight along the field
+    res = simulate_shots(f, [[0.0, 0.0], [0.0, 0.0]], [[0.3, 1.0], [1.0, 0.0]], engine="numpy")
+    fast = simulate_shots(f, [[0.0, 0.0], [0.0, 0.0]], [[0.3, 1.0], [1.0, 0.0]],
+                          engine="compiled")
+    assert res.wall_contacts[0] >= 1 and res.wall_contacts[1] == 0
+    np.testing.assert_array_equal(fast.wall_contacts, res.wall_contacts)
+    stroke = Stroke(np.array([1.0, 0.0, 0.0]), 1.0)
+    al, ka = np.deg2rad(np.linspace(-40, 40, 81)), np.linspace(0.8, 2.4, 17)
+    ball = np.array([0.0, 0.3])
+    with_banks = success_map(f, stroke, ball, f.hole, al, ka)
+    direct = success_map(f, stroke, ball, f.hole, al, ka, banks=False)
+    assert direct.sum() > 0 and np.all(with_banks >= direct)
+    A, K = np.meshgrid(al, ka)
+    r = simulate_shots(f, np.tile(ball, (A.size, 1)), stroke.launch_velocity(A.ravel(), K.ravel()))
+    np.testing.assert_array_equal(direct.ravel(), r.sunk & (r.wall_contacts == 0))
+    assert (with_banks & ~direct).any()  # this field has bank shots, and they were left out

@@ -106,6 +106,12 @@ def test_the_arm_in_exudyn_hits_like_the_pinocchio_swing():
                                                              rel=0.03)
     fast = simulate_shots(f, ball[None], impact(sw.hit_velocity[None]), engine="numpy")
     assert fast.sunk[0]
+    # the impact in exudyn (the whole arm, contact with restitution 0.8, adaptive steps)
+    # launches the ball as the impact model predicts from the Pinocchio swing
+    launch = impact(sw.hit_velocity[None], face_normal=sw.face_normal[None],
+                    club_mass=sw.effective_mass)[0]
+    assert np.linalg.norm(ex.launch_velocity) == pytest.approx(np.linalg.norm(launch),
+                                                               rel=0.005)
     # a swing far too slow to reach the ball in time is reported as a miss, not a crash
     slow = simulate_shot_exudyn(f, ball, max_time=3.5, arm={
         "robot": robot, "motion": motion, "alpha": alpha, "kappa": 0.03})
