@@ -135,6 +135,9 @@ def approach_paths(direction, speed: float, length: float = 0.05, order: float =
     return P, V
 
 
+_approach_paths = approach_paths  # HittingMotion.fit's flag of the same name shadows it
+
+
 def _probe_starts(demos: Demonstrations, n_random: int = 24) -> np.ndarray:
     """The demonstrations' first points and ``n_random`` fixed random points in their box."""
     first = np.array([p[0] for p in demos.positions])
@@ -741,5 +744,3 @@ class HittingMotion:
         xdot = kappa * (R @ (ca.exp(sf._saturate(logv, lib=ca)) * h))
         return ca.Function(name, [x, alpha, kappa], [xdot], ["x", "alpha", "kappa"], ["xdot"])
 
-
-_approach_paths = approach_paths
