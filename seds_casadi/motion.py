@@ -23,7 +23,7 @@ Choices where the paper leaves them open (documented for users):
   r^0.6 and a swing from the side still arrives several degrees off (19 of 50 random starts
   more than 1 deg off). :meth:`HittingMotion.fit` therefore adds *approach paths* to the SEDS
   data (not to the strength factor): short virtual paths over the last ``approach_length``
-  (5 cm) before the ball, b = c a^``approach_order`` (a: distance behind the ball along the
+  (10 cm) before the ball, b = c a^``approach_order`` (a: distance behind the ball along the
   demonstrations' arrival direction u, b: sideways offset, 8 sides, two initial slopes), all
   tangent to u at the ball. They teach the direction objective (Eq. 9) to bring sideways
   motion in faster than the approach (order 3: the misalignment decays as r^2 in the ideal
@@ -364,7 +364,7 @@ class HittingMotion:
     @classmethod
     def fit(cls, demos: Demonstrations, n_components: int = 3, strength_components: int = 2,
             random_state=0, approach_ratio: float | None = None, approach_paths: bool = True,
-            approach_length: float = 0.05, approach_order: float = 3.0, restarts: int = 3,
+            approach_length: float = 0.1, approach_order: float = 3.0, restarts: int = 3,
             max_direction_error: float = 1.0, **seds_kwargs) -> HittingMotion:
         """Learn the target field (SEDS, direction objective) and the strength factor (GMR).
 

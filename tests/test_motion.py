@@ -243,15 +243,17 @@ def test_approach_paths_are_tangent_to_the_arrival_direction():
 
 
 def test_a_badly_lined_up_fit_is_refitted_and_reported(demos):
-    # with these demonstrations, SEDS from seed 3 sends swings in 47 deg off (found by search)
-    m = HittingMotion.fit(demos, n_components=3, random_state=3)
+    # with these demonstrations, SEDS from seed 3 arrives 0.23 deg off at worst and from seed 4
+    # 0.003 deg (found by search): asking for 0.1 deg makes the fit try again
+    m = HittingMotion.fit(demos, n_components=3, random_state=3, max_direction_error=0.1)
     tries = m.fit_info["tries"]
-    assert len(tries) >= 2 and tries[0]["max_direction_error_deg"] > 1.0
-    assert tries[m.fit_info["kept"]]["max_direction_error_deg"] <= 1.0
+    assert len(tries) >= 2 and tries[0]["max_direction_error_deg"] > 0.1
+    assert tries[m.fit_info["kept"]]["max_direction_error_deg"] <= 0.1
     from seds_casadi.errors import ConvergenceWarning
 
     with pytest.warns(ConvergenceWarning, match="arrives up to"):
-        HittingMotion.fit(demos, n_components=3, random_state=3, restarts=1)
+        HittingMotion.fit(demos, n_components=3, random_state=3, restarts=1,
+                          max_direction_error=0.1)
     with pytest.raises(ValueError, match="restarts"):
         HittingMotion.fit(demos, restarts=0)
     with pytest.raises(ValueError, match="max_direction_error"):
