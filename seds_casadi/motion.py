@@ -20,10 +20,12 @@ Choices where the paper leaves them open (documented for users):
 * **How quickly swings line up (approach paths, on by default).** Plain SEDS fixes the limit
   direction psi* but not how fast swings line up with it: with the slowest and next eigenvalues
   of J close (ratio ~1.6 on the shipped demonstrations), the misalignment decays only as
-  r^0.6 and a swing from the side still arrives several degrees off (19 of 50 random starts
-  more than 1 deg off). :meth:`HittingMotion.fit` therefore adds *approach paths* to the SEDS
-  data (not to the strength factor): short virtual paths over the last ``approach_length``
-  (10 cm) before the ball, b = c a^``approach_order`` (a: distance behind the ball along the
+  r^0.6 and a swing from the side still arrives degrees off (4 of 50 random starts more than
+  1 deg off at the hit, all 50 commanded more than 1 deg off somewhere in the last centimetre;
+  ``benchmarks/eval_hitting_accuracy.py --no-approach-paths``). :meth:`HittingMotion.fit`
+  therefore adds *approach paths* to the SEDS data (not to the strength factor): short virtual
+  paths over the last ``approach_length`` (10 cm) before the ball, b = c a^``approach_order``
+  (a: distance behind the ball along the
   demonstrations' arrival direction u, b: sideways offset, 8 sides, two initial slopes), all
   tangent to u at the ball. They teach the direction objective (Eq. 9) to bring sideways
   motion in faster than the approach (order 3: the misalignment decays as r^2 in the ideal
