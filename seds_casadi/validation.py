@@ -149,8 +149,8 @@ def simulate_shot_exudyn(field: Field, ball_xy, club_velocity=None, hole=None,
                          max_time: float = 12.0, step: float = 1e-3, tolerance: float = 1e-6,
                          impact_step: float = 2e-4, impact_tolerance: float = 1e-7,
                          mesh_spacing: float | None = None, gap: float = 0.01,
-                         restitution: float = RESTITUTION, arm: dict | None = None
-                         ) -> ExudynShot:
+                         restitution: float = RESTITUTION, arm: dict | None = None,
+                         max_wall_time: float = 600.0) -> ExudynShot:
     """One shot in exudyn (module docstring); the ball rolls until it drops, stops or the time
     runs out.
 
@@ -164,9 +164,17 @@ def simulate_shot_exudyn(field: Field, ball_xy, club_velocity=None, hole=None,
     ``impact_step`` and ``impact_tolerance`` are the largest integration step [s] and the step
     control's tolerance for the swing and the impact, ``step`` and ``tolerance`` for the roll
     that follows (from 20 ms after the ball leaves the club). Raises ``RuntimeError`` naming
-    the time when exudyn's solver fails (never a silently truncated result).
+    the time when exudyn's solver fails, or when the shot has taken more than ``max_wall_time``
+    seconds of computing (the step control shrinking its steps without end; a run with
+    tolerance 1e-7 through the whole roll once took 44 minutes for one shot); never a silently
+    truncated result.
     """
     import time
+
+    if not (max_wall_time > 0 and step > 0 and impact_step > 0 and tolerance > 0
+            and impact_tolerance > 0):
+        raise ValueError("max_wall_time, step, impact_step, tolerance and impact_tolerance "
+                         "must be positive")
 
     import exudyn as exu
     from exudyn.utilities import InertiaSphere, LoadForceVector, MarkerBodyRigid
@@ -329,6 +337,9 @@ def simulate_shot_exudyn(field: Field, ball_xy, club_velocity=None, hole=None,
 
     def pre_step(mbs_, t):
         dt_step, state["t_prev"] = t - state["t_prev"], t
+        if time.perf_counter() - t0 > max_wall_time:
+            state["timed_out"] = True
+            return False
         if arm_state is not None and t < state.get("contact_time", np.inf) + 0.5:
             arm_state["control"](mbs_, t)  # the swing, then the resting mode for 0.5 s
         p = mbs_.GetNodeOutput(ball_node, pos_t)
@@ -413,6 +424,11 @@ def simulate_shot_exudyn(field: Field, ball_xy, club_velocity=None, hole=None,
         raise RuntimeError(f"exudyn failed near t = {t_fail:.3f} s of the shot: {exc}") from None
     finally:
         exu.SetWriteToConsole(True)
+    if state.get("timed_out"):
+        raise RuntimeError(
+            f"exudyn took more than {max_wall_time:g} s of computing and reached only "
+            f"t = {state['t_prev']:.3f} s of the shot (its step control is taking tiny steps); "
+            "loosen tolerance or raise max_wall_time")
     wall = time.perf_counter() - t0
     p = np.asarray(mbs.GetNodeOutput(ball_node, exu.OutputVariableType.Position))
     t_end = path[-1][0] if path else 0.0

@@ -131,6 +131,12 @@ def test_mesh_and_bad_input():
         simulate_shot_exudyn(f, [0.1, 0.0], [0.0, 0.0, 0.0])
     with pytest.raises(ValueError, match="ball region"):
         simulate_shot_exudyn(f, [2.0, 0.0], [1.0, 0.0, 0.0])
+    with pytest.raises(ValueError, match="must be positive"):
+        simulate_shot_exudyn(f, [0.1, 0.0], [1.0, 0.0, 0.0], tolerance=0.0)
+    # a shot that runs out of its computing budget is an error naming how far it got, never a
+    # truncated result
+    with pytest.raises(RuntimeError, match=r"more than 0.05 s of computing and reached only"):
+        simulate_shot_exudyn(f, [0.1, 0.0], [1.5, 0.0, 0.0], max_wall_time=0.05)
 
 
 def test_validate_command_line(tmp_path):
