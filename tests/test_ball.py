@@ -307,6 +307,11 @@ def test_simd_translator_against_casadi_on_random_states():
     np.testing.assert_allclose(S, ref, rtol=1e-12, atol=1e-12)
     with pytest.raises(ValueError, match="C-contiguous"):
         loop.run(S.T, 1)
+    aux = ca.SX.sym("aux", 2)
+    tab = ca.Function("t", [x, aux], [x + ca.vertcat(aux, aux)])
+    lookup = dict(ix=0, iy=1, x0=0.0, dx=1.0, nx=3, y0=0.0, dy=1.0, ny=3, channels=2)
+    with pytest.raises(ValueError, match="the table has 5 values, the lookup needs 18"):
+        SimdLoop(tab, "t_loop", lookup=lookup, table=np.zeros(5))
     g = ca.Function("h", [x], [ca.interpolant("t", "linear", [[0.0, 1.0, 2.0]],
                                               [0.0, 1.0, 4.0])(x[0]) * x])
     with pytest.raises(UnsupportedOperation, match="not translated|SX"):

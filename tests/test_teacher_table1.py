@@ -233,3 +233,16 @@ def test_table1_command_line_quick(tmp_path):
                           "--out", str(tmp_path / "x")], capture_output=True, text=True,
                          timeout=120)
     assert bad.returncode == 2 and "no field 'moon'" in bad.stderr
+
+
+def test_the_teacher_keeps_to_direct_shots_unless_banks_are_allowed(datasets):
+    # on this arctan field the slowest hits are often banks off the side wall; the default
+    # teacher (banks=False) leaves them out, banks=True takes some of them
+    f, ds = datasets["arctan"]
+    r = simulate_shots(f, ds.ball, ds.stroke.launch_velocity(ds.alpha, ds.kappa), hole=ds.hole,
+                       engine="numpy")
+    assert r.sunk.all() and (r.wall_contacts == 0).all()
+    banked = collect_dataset(f, STROKE, banks=True, **COARSE)
+    rb = simulate_shots(f, banked.ball, banked.stroke.launch_velocity(banked.alpha, banked.kappa),
+                        hole=banked.hole, engine="numpy")
+    assert rb.sunk.mean() >= 0.9 and (rb.wall_contacts > 0).any()
