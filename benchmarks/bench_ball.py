@@ -18,9 +18,9 @@ import time
 
 import numpy as np
 
-from seds_casadi.ball import BallKernel, ball_kernel, simulate_shots
-from seds_casadi.fields import load_field
-from seds_casadi.teacher import Stroke, success_map
+from seds_casadi.minigolf.ball import BallKernel, ball_kernel, simulate_shots
+from seds_casadi.minigolf.fields import load_field
+from seds_casadi.minigolf.teacher import Stroke, success_map
 
 
 def shots(field, n, rng):

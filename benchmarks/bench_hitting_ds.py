@@ -19,8 +19,8 @@ import time
 import casadi as ca
 import numpy as np
 
-from seds_casadi.datasets import load_hitting_demos
-from seds_casadi.motion import HittingMotion
+from seds_casadi.motion.hitting import HittingMotion
+from seds_casadi.motion.putting_demos import load_hitting_demos
 
 
 def median_us(fn, repeat: int) -> float:

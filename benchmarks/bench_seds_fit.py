@@ -22,9 +22,9 @@ import numpy as np
 from scipy.optimize import minimize
 
 from seds_casadi import SEDS, ConvergenceWarning
-from seds_casadi.datasets import LASA_SINGLE_SHAPES, load_lasa
-from seds_casadi.metrics import direction_error
-from seds_casadi.parametrization import objective_numpy
+from seds_casadi.core.datasets import LASA_SINGLE_SHAPES, load_lasa
+from seds_casadi.core.metrics import direction_error
+from seds_casadi.core.parametrization import objective_numpy
 
 
 def fit_times(shapes, K, n_samples):

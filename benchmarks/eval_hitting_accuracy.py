@@ -20,8 +20,8 @@ import argparse
 
 import numpy as np
 
-from seds_casadi.datasets import load_hitting_demos
-from seds_casadi.motion import HittingMotion, rotation_z
+from seds_casadi.motion.hitting import HittingMotion, rotation_z
+from seds_casadi.motion.putting_demos import load_hitting_demos
 
 
 def main():

@@ -14,8 +14,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from seds_casadi import SEDS  # noqa: E402
-from seds_casadi.datasets import load_lasa  # noqa: E402
-from seds_casadi.motion import TargetField  # noqa: E402
+from seds_casadi.core.datasets import load_lasa
+from seds_casadi.motion.hitting import TargetField
 
 ap = argparse.ArgumentParser()
 ap.add_argument("--out", default="fig2.png")

@@ -15,12 +15,12 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from seds_casadi.ball import simulate_shots  # noqa: E402
-from seds_casadi.datasets import load_hitting_demos  # noqa: E402
-from seds_casadi.fields import load_field  # noqa: E402
-from seds_casadi.motion import HittingMotion  # noqa: E402
-from seds_casadi.plotting import plot_field, plot_success_map  # noqa: E402
-from seds_casadi.teacher import Stroke, Teacher, success_map  # noqa: E402
+from seds_casadi.app.plotting import plot_field, plot_success_map
+from seds_casadi.minigolf.ball import simulate_shots
+from seds_casadi.minigolf.fields import load_field
+from seds_casadi.minigolf.teacher import Stroke, Teacher, success_map
+from seds_casadi.motion.hitting import HittingMotion
+from seds_casadi.motion.putting_demos import load_hitting_demos
 
 ap = argparse.ArgumentParser()
 ap.add_argument("--out", default="fig4a.png")

@@ -17,11 +17,11 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from seds_casadi.control import default_base, simulate_swing  # noqa: E402
-from seds_casadi.datasets import load_hitting_demos  # noqa: E402
-from seds_casadi.motion import HittingMotion  # noqa: E402
-from seds_casadi.plotting import plot_arm_frames  # noqa: E402
-from seds_casadi.robots import load_robot  # noqa: E402
+from seds_casadi.app.plotting import plot_arm_frames
+from seds_casadi.motion.hitting import HittingMotion
+from seds_casadi.motion.putting_demos import load_hitting_demos
+from seds_casadi.robots.control import default_base, simulate_swing
+from seds_casadi.robots.models import load_robot
 
 ap = argparse.ArgumentParser()
 ap.add_argument("--out", default="fig7.png")

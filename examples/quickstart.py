@@ -11,8 +11,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 from seds_casadi import SEDS  # noqa: E402
-from seds_casadi.datasets import load_lasa  # noqa: E402
-from seds_casadi.plotting import plot_streamlines  # noqa: E402
+from seds_casadi.app.plotting import plot_streamlines
+from seds_casadi.core.datasets import load_lasa
 
 ap = argparse.ArgumentParser()
 ap.add_argument("--out", default="quickstart.png")

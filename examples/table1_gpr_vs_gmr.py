@@ -17,12 +17,13 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from seds_casadi.datasets import load_hitting_demos  # noqa: E402
-from seds_casadi.executors import open_executor  # noqa: E402
-from seds_casadi.fields import load_field  # noqa: E402
-from seds_casadi.motion import HittingMotion  # noqa: E402
-from seds_casadi.table1 import fig10, fig11, format_table1, run_table1  # noqa: E402
-from seds_casadi.teacher import Stroke, collect_dataset  # noqa: E402
+from seds_casadi.app.executors import open_executor
+from seds_casadi.app.table1 import fig10, fig11
+from seds_casadi.minigolf.fields import load_field
+from seds_casadi.minigolf.table1 import format_table1, run_table1
+from seds_casadi.minigolf.teacher import Stroke, collect_dataset
+from seds_casadi.motion.hitting import HittingMotion
+from seds_casadi.motion.putting_demos import load_hitting_demos
 
 ap = argparse.ArgumentParser()
 ap.add_argument("--out", default="table1.png")

@@ -17,18 +17,18 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from seds_casadi.datasets import load_hitting_demos  # noqa: E402
-from seds_casadi.fields import load_field  # noqa: E402
-from seds_casadi.hitting import make_model  # noqa: E402
-from seds_casadi.motion import HittingMotion  # noqa: E402
-from seds_casadi.play import play_shot  # noqa: E402
-from seds_casadi.table1 import (  # noqa: E402
+from seds_casadi.app.play import play_shot
+from seds_casadi.minigolf.fields import load_field
+from seds_casadi.minigolf.parameters import make_model
+from seds_casadi.minigolf.table1 import (
     PAPER_TABLE1,
     TRAINING_SETS,
     _test_situations,
     training_indices,
 )
-from seds_casadi.teacher import Stroke, collect_dataset  # noqa: E402
+from seds_casadi.minigolf.teacher import Stroke, collect_dataset
+from seds_casadi.motion.hitting import HittingMotion
+from seds_casadi.motion.putting_demos import load_hitting_demos
 
 # the paper's Table 2 (real WAM): (field, training, model) -> (e_alpha, success)
 PAPER_TABLE2 = {

@@ -4,16 +4,10 @@ Reference implementation of Khansari-Zadeh, Kronander and Billard, "Learning to 
 A Dynamical System-based Approach" (Advanced Robotics, 2012), and of SEDS in Python.
 """
 
-from .demonstrations import Demonstrations, load_demonstrations, save_demonstrations
-from .errors import (
-    ConvergenceWarning,
-    ModelFileError,
-    SEDSError,
-    SolverError,
-    StabilityError,
-)
-from .seds import SEDS, SEDSProblem
-from .stable_ds import StableDS, certify
+from .core.demonstrations import Demonstrations, load_demonstrations, save_demonstrations
+from .core.errors import ConvergenceWarning, ModelFileError, SEDSError, SolverError, StabilityError
+from .core.seds import SEDS, SEDSProblem
+from .core.stable_ds import StableDS, certify
 
 __version__ = "0.1.0"
 

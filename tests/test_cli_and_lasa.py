@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from seds_casadi import StableDS, save_demonstrations
-from seds_casadi.datasets import LASA_SHAPES, LASA_SINGLE_SHAPES, load_lasa
-from seds_casadi.lasa import CSV_COLUMNS, evaluate_shape, run_lasa
+from seds_casadi.app.lasa import CSV_COLUMNS, evaluate_shape, run_lasa
+from seds_casadi.core.datasets import LASA_SHAPES, LASA_SINGLE_SHAPES, load_lasa
 
 
 def _cli():

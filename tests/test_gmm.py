@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy.stats import multivariate_normal
 
-from seds_casadi.gmm import gmr_predict, log_gaussian, responsibilities
+from seds_casadi.core.gmm import gmr_predict, log_gaussian, responsibilities
 
 
 def test_log_gaussian_matches_scipy():

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from seds_casadi.hitting import (
+from seds_casadi.minigolf.parameters import (
     GMRModel,
     GPRModel,
     gmm_param_count,

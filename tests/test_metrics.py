@@ -4,7 +4,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from seds_casadi.metrics import direction_error, dtw_distance, swept_error_area, velocity_rmse
+from seds_casadi.core.metrics import direction_error, dtw_distance, swept_error_area, velocity_rmse
 
 
 def _dtw_reference(s, t):

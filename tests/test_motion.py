@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from seds_casadi import SEDS, Demonstrations
-from seds_casadi.motion import HittingMotion, StrengthFactor, TargetField, rotation_z
-from seds_casadi.putting_demos import generate_putting_demos
+from seds_casadi.motion.hitting import HittingMotion, StrengthFactor, TargetField, rotation_z
+from seds_casadi.motion.putting_demos import generate_putting_demos
 
 
 @pytest.fixture(scope="module")
@@ -146,7 +146,7 @@ def test_rotation_is_about_z():
 
 
 def test_shipped_hitting_demos_are_the_generator_output():
-    from seds_casadi.datasets import HITTING_DEMOS_FILE, load_hitting_demos
+    from seds_casadi.motion.putting_demos import HITTING_DEMOS_FILE, load_hitting_demos
 
     shipped = load_hitting_demos()
     made = generate_putting_demos(random_state=0)
@@ -220,7 +220,7 @@ def test_probe_equals_rollout(motion, demos):
 
 
 def test_approach_paths_are_tangent_to_the_arrival_direction():
-    from seds_casadi.motion import approach_paths
+    from seds_casadi.motion.hitting import approach_paths
 
     u = np.array([1.0, 0.2, 0.0]) / np.hypot(1.0, 0.2)
     P, V = approach_paths(u, 1.2, length=0.05, order=3.0)
@@ -249,7 +249,7 @@ def test_a_badly_lined_up_fit_is_refitted_and_reported(demos):
     tries = m.fit_info["tries"]
     assert len(tries) >= 2 and tries[0]["max_direction_error_deg"] > 0.1
     assert tries[m.fit_info["kept"]]["max_direction_error_deg"] <= 0.1
-    from seds_casadi.errors import ConvergenceWarning
+    from seds_casadi.core.errors import ConvergenceWarning
 
     with pytest.warns(ConvergenceWarning, match="arrives up to"):
         HittingMotion.fit(demos, n_components=3, random_state=3, restarts=1,

@@ -7,8 +7,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from seds_casadi import SEDS
-from seds_casadi.kernels import SumKernels, unpack_casadi
-from seds_casadi.parametrization import OBJECTIVES, Layout, objective_numpy, unpack_numpy
+from seds_casadi.core.objectives import SumKernels, unpack_casadi
+from seds_casadi.core.parametrization import OBJECTIVES, Layout, objective_numpy, unpack_numpy
 
 MARGIN = 1e-3
 

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from seds_casadi.play import SHOT_COLUMNS
+from seds_casadi.app.play import SHOT_COLUMNS
 
 SCRIPT = Path(sys.executable).parent / "seds-casadi"
 

@@ -6,16 +6,16 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from seds_casadi.control import (
+from seds_casadi.motion.hitting import HittingMotion, rotation_z
+from seds_casadi.motion.putting_demos import load_hitting_demos
+from seds_casadi.robots.control import (
     SwingController,
     default_base,
     gravity_ratio,
     place_head,
     simulate_swing,
 )
-from seds_casadi.datasets import load_hitting_demos
-from seds_casadi.motion import HittingMotion, rotation_z
-from seds_casadi.robots import (
+from seds_casadi.robots.models import (
     KATANA_ORIGINS,
     KATANA_TOOL,
     ROBOTS_FOLDER,
@@ -238,7 +238,7 @@ def test_bad_inputs(tmp_path, motion):
         load_robot(str(bad))
     with pytest.raises(ValueError, match="inside the field surface"):
         load_robot("wam", base=(0, 0.5, -0.2, 0))
-    from seds_casadi.fields import load_field
+    from seds_casadi.minigolf.fields import load_field
 
     hills = load_field("double_hill")
     with pytest.raises(ValueError, match="inside the field surface"):
@@ -264,7 +264,7 @@ def test_start_is_placed_behind_the_ball_facing_the_hit(motion):
 
 
 def test_effective_mass_at_the_face_matches_the_inverse_inertia():
-    from seds_casadi.control import effective_mass
+    from seds_casadi.robots.control import effective_mass
 
     r = load_robot("wam")
     for _ in range(3):

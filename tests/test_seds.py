@@ -16,9 +16,9 @@ from seds_casadi import (
     StableDS,
     certify,
 )
-from seds_casadi.datasets import load_lasa
-from seds_casadi.metrics import direction_error
-from seds_casadi.parametrization import OBJECTIVES
+from seds_casadi.core.datasets import load_lasa
+from seds_casadi.core.metrics import direction_error
+from seds_casadi.core.parametrization import OBJECTIVES
 
 
 def _assert_certified(model: StableDS):
@@ -249,7 +249,7 @@ def test_rollout_and_predict_bad_input(fitted):
 def test_approach_constraint_holds_after_fitting(curved_demos_3d):
     """The optional arrival constraint: u is an eigenvector of J = sum_k h_k(x*) A_k, and the
     symmetric part of J across u is at least `ratio` times faster than the rate along u."""
-    from seds_casadi.gmm import responsibilities
+    from seds_casadi.core.gmm import responsibilities
 
     u = np.array([1.0, -0.4, 0.2])
     u /= np.linalg.norm(u)

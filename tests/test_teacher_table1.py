@@ -8,17 +8,17 @@ import sys
 import numpy as np
 import pytest
 
-from seds_casadi.ball import simulate_shots
-from seds_casadi.executors import InlineExecutor, open_executor
-from seds_casadi.fields import load_field
-from seds_casadi.table1 import (
+from seds_casadi.app.executors import InlineExecutor, open_executor
+from seds_casadi.minigolf.ball import simulate_shots
+from seds_casadi.minigolf.fields import load_field
+from seds_casadi.minigolf.table1 import (
     CSV_COLUMNS,
     format_table1,
     run_table1,
     training_indices,
     write_table1_csv,
 )
-from seds_casadi.teacher import (
+from seds_casadi.minigolf.teacher import (
     HittingDataset,
     Stroke,
     Teacher,

@@ -8,15 +8,11 @@ import warnings
 import numpy as np
 import pytest
 
-from seds_casadi.ball import impact, simulate_shots
-from seds_casadi.fields import Field, load_field
-from seds_casadi.teacher import Stroke, Teacher
-from seds_casadi.validation import (
-    VALIDATION_COLUMNS,
-    field_mesh,
-    free_fall,
-    simulate_shot_exudyn,
-)
+from seds_casadi.app.validate import VALIDATION_COLUMNS
+from seds_casadi.minigolf.ball import impact, simulate_shots
+from seds_casadi.minigolf.fields import Field, load_field
+from seds_casadi.minigolf.teacher import Stroke, Teacher
+from seds_casadi.sim.exudyn_shot import field_mesh, free_fall, simulate_shot_exudyn
 
 pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
 STROKE = Stroke(np.array([0.995, 0.097, -0.003]), 0.99)
@@ -72,7 +68,7 @@ def test_double_hill_shot_follows_the_fast_model():
 
 @pytest.mark.parametrize("name", ["wam", "katana", "panda"])
 def test_kinematic_tree_falls_like_pinocchio(name):
-    from seds_casadi.robots import load_robot
+    from seds_casadi.robots.models import load_robot
 
     r = load_robot(name, base=(0.2, 0.5, 0.1, -1.0))
     q0 = r.q_home + 0.1
@@ -82,10 +78,10 @@ def test_kinematic_tree_falls_like_pinocchio(name):
 
 
 def test_the_arm_in_exudyn_hits_like_the_pinocchio_swing():
-    from seds_casadi.control import default_base, simulate_swing
-    from seds_casadi.datasets import load_hitting_demos
-    from seds_casadi.motion import HittingMotion
-    from seds_casadi.robots import load_robot
+    from seds_casadi.motion.hitting import HittingMotion
+    from seds_casadi.motion.putting_demos import load_hitting_demos
+    from seds_casadi.robots.control import default_base, simulate_swing
+    from seds_casadi.robots.models import load_robot
 
     motion = HittingMotion.fit(load_hitting_demos(), n_components=3)
     f = load_field("flat")

@@ -9,7 +9,7 @@ function's instruction list, so it computes exactly the same expression as the C
 (up to the compiler's floating-point contractions and the vector math library's exp/log, which
 are within a few ulp).
 
-Used by :class:`seds_casadi.ball.BallKernel`; falls back to CasADi's kernel when there is no C
+Used by :class:`seds_casadi.minigolf.ball.BallKernel`; falls back to CasADi's kernel when there is no C
 compiler, the step uses an operation not translated here (e.g. an interpolant call), or the
 compiler fails.
 """
@@ -18,17 +18,13 @@ from __future__ import annotations
 
 import ctypes
 import hashlib
-import os
-import shutil
-import subprocess
-import tempfile
 import threading
 from concurrent.futures import ThreadPoolExecutor
 
 import casadi as ca
 import numpy as np
 
-from .kernels import cache_folder, compiler_available
+from .cache import CompileError, shared_library
 
 __all__ = ["simd_source", "SimdLoop", "UnsupportedOperation"]
 
@@ -202,8 +198,7 @@ class SimdLoop:
         No C compiler, or compilation failed (the message has the compiler's output).
     """
 
-    FLAGS = ("-O3", "-march=native", "-fopenmp-simd", "-fno-math-errno", "-fno-trapping-math",
-             "-shared", "-fPIC")
+    FLAGS = ("-O3", "-march=native", "-fopenmp-simd", "-fno-math-errno", "-fno-trapping-math")
 
     def __init__(self, step: ca.Function, name: str = "simd_step", done_index: int | None = None,
                  threads: int = 2, lookup: dict | None = None, table=None) -> None:
@@ -218,41 +213,15 @@ class SimdLoop:
             self._table = np.zeros(1)
         self.n_state = step.nnz_in(0)
         self.threads = max(1, int(threads))
-        cc = compiler_available()
-        if cc is None:
-            raise RuntimeError("no C compiler available (or SEDS_CASADI_JIT=0)")
-        libs = ["-lmvec", "-lm"] if "declare simd" in src else ["-lm"]
-        key = hashlib.sha256(src.encode() + cc.encode() + " ".join(self.FLAGS).encode()
-                             + _cpu_key().encode()).hexdigest()[:24]
+        libs = ("-lmvec", "-lm") if "declare simd" in src else ("-lm",)
+        try:
+            path = shared_library(src.encode(), "simd", self.FLAGS, libs, key_extra=_cpu_key())
+        except CompileError as exc:
+            raise RuntimeError(f"compiling the SIMD loop failed: {exc}") from None
         with _LOCK:
-            lib = _LOADED.get(key)
+            lib = _LOADED.get(path)
             if lib is None:
-                folder = cache_folder()
-                path = os.path.join(folder, f"simd_{key}.so")
-                if not os.path.exists(path):
-                    os.makedirs(folder, exist_ok=True)
-                    tmpdir = tempfile.mkdtemp(prefix="seds_simd_")
-                    try:
-                        c_path = os.path.join(tmpdir, "k.c")
-                        with open(c_path, "w") as fh:
-                            fh.write(src)
-                        tmp_lib = os.path.join(tmpdir, "k.so")
-                        try:
-                            subprocess.run([cc, *self.FLAGS, c_path, "-o", tmp_lib, *libs],
-                                           check=True, capture_output=True, timeout=600)
-                        except subprocess.CalledProcessError as exc:
-                            raise RuntimeError("compiling the SIMD loop failed: "
-                                               + exc.stderr.decode(errors="replace")[-2000:]
-                                               ) from None
-                        except (subprocess.SubprocessError, OSError) as exc:
-                            raise RuntimeError(f"compiling the SIMD loop failed: {exc}") from None
-                        fd, staged = tempfile.mkstemp(prefix=".k-", suffix=".so", dir=folder)
-                        os.close(fd)
-                        shutil.copyfile(tmp_lib, staged)
-                        os.replace(staged, path)
-                    finally:
-                        shutil.rmtree(tmpdir, ignore_errors=True)
-                lib = _LOADED[key] = ctypes.CDLL(path)
+                lib = _LOADED[path] = ctypes.CDLL(path)
         fn = getattr(lib, name)
         fn.restype = None
         fn.argtypes = [ctypes.c_int, ctypes.c_int, ctypes.c_int,

@@ -48,14 +48,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..motion.golf import BALL_MASS, BALL_RADIUS, G
 from .fields import Field
 
 __all__ = ["BALL_MASS", "BALL_RADIUS", "G", "impact", "capture_speed", "simulate_shots",
            "ShotResult", "BallKernel", "ball_kernel"]
 
-G = 9.81
-BALL_MASS = 0.0459
-BALL_RADIUS = 0.02135
 MU_SLIDE = 0.2
 CLUB_MASS = 0.35
 RESTITUTION = 0.8
@@ -176,7 +174,7 @@ def simulate_shots(field: Field, ball_xy, launch_velocity, dt: float = 0.01,
     if engine == "compiled" and record_paths:
         raise ValueError("record_paths needs engine='numpy' (the compiled engine keeps no paths)")
     if engine == "auto":
-        from .kernels import compiler_available
+        from ..codegen import compiler_available
 
         engine = ("compiled" if (not record_paths and compiler_available()
                                  and np.size(ball_xy) > 16) else "numpy")
@@ -356,7 +354,7 @@ class BallKernel:
         self._simd = None
         self.simd_error = None
         if backend in ("auto", "simd"):
-            from .simd import SimdLoop, UnsupportedOperation
+            from ..codegen.simd import SimdLoop, UnsupportedOperation
 
             try:
                 if field.surface.tabulated:
@@ -378,7 +376,7 @@ class BallKernel:
     def _build_casadi(self) -> None:
         import casadi as ca
 
-        from .kernels import compile_functions
+        from ..codegen import compile_functions
 
         step = self._step(ca)
         s = ca.MX.sym("s", 11)

@@ -22,7 +22,7 @@ import numpy as np
 from .demonstrations import Demonstrations
 from .errors import ConvergenceWarning, SolverError
 from .gmm import responsibilities
-from .kernels import SumKernels, approach_constraints
+from .objectives import SumKernels, approach_constraints
 from .parametrization import OBJECTIVES, Layout, unpack_numpy
 from .stable_ds import StableDS
 

@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._io import atomic_npz
+from ..core._io import atomic_npz
 from .ball import CLUB_MASS, MU_SLIDE, RESTITUTION, G, impact, simulate_shots
 from .fields import Field, load_field
 

@@ -21,7 +21,7 @@ import time
 
 import numpy as np
 
-from ._io import atomic_csv, atomic_text
+from ..core._io import atomic_csv, atomic_text
 
 __all__ = ["play", "play_shot", "SHOT_COLUMNS"]
 
@@ -34,7 +34,7 @@ _MOTIONS: dict = {}
 
 
 def _motion(folder):
-    from .motion import HittingMotion
+    from ..motion.hitting import HittingMotion
 
     if isinstance(folder, HittingMotion):
         return folder
@@ -49,9 +49,9 @@ def play_shot(task: dict) -> dict:
     ``task`` has ``method, shot, ball (2,), hole (2,), alpha [rad], kappa, robot, field (name),
     field_spec (dict), motion`` (a :class:`~seds_casadi.motion.HittingMotion` or the folder it
     was saved in). Returns the shot's row of ``shots.csv`` (plus the ball's ``path``)."""
-    from .ball import BALL_RADIUS, impact, simulate_shots
-    from .control import place_robot, simulate_swing
-    from .fields import Field
+    from ..minigolf.ball import BALL_RADIUS, impact, simulate_shots
+    from ..minigolf.fields import Field
+    from ..robots.control import place_robot, simulate_swing
 
     field = Field.from_dict(task["field_spec"], source=task["field"])
     motion = _motion(task["motion"])
@@ -98,14 +98,14 @@ def play(robot: str = "wam", field: str = "arctan", demos: str | None = None,
          models: str | None = None, quick: bool = False, validate_shots: int = 2,
          workers: int = 1, dask: str | None = None, progress: bool = True) -> dict:
     """Run the main job (module docstring); returns a summary dict and writes ``out``."""
-    from .datasets import load_hitting_demos
-    from .demonstrations import load_demonstrations
+    from ..core.demonstrations import load_demonstrations
+    from ..minigolf.fields import load_field
+    from ..minigolf.parameters import make_model
+    from ..minigolf.teacher import HittingDataset, Stroke, collect_dataset
+    from ..motion.hitting import HittingMotion
+    from ..motion.putting_demos import load_hitting_demos
+    from ..robots.models import load_robot, robot_names
     from .executors import open_executor
-    from .fields import load_field
-    from .hitting import make_model
-    from .motion import HittingMotion
-    from .robots import load_robot, robot_names
-    from .teacher import HittingDataset, Stroke, collect_dataset
 
     learners = list(learners)
     bad = [m for m in learners if m not in ("gpr", "gmr", "sep_gmr")]
@@ -185,8 +185,8 @@ def play(robot: str = "wam", field: str = "arctan", demos: str | None = None,
     # 5. a few shots again in exudyn
     t4 = time.perf_counter()
     if validate_shots > 0:
-        from .control import place_robot
-        from .validation import simulate_shot_exudyn
+        from ..robots.control import place_robot
+        from ..sim.exudyn_shot import simulate_shot_exudyn
 
         for row in [r for r in rows if r["method"] == learners[0] and r["hit"]][:validate_shots]:
             ball = np.array([row["ball_x"], row["ball_y"]])
@@ -218,7 +218,7 @@ def play(robot: str = "wam", field: str = "arctan", demos: str | None = None,
 
 
 def _figures(fld, motion, data, fitted, rows, learners, out) -> None:
-    from .motion import rotation_z
+    from ..motion.hitting import rotation_z
     from .plotting import _plt, plot_field, save_figure
 
     plt = _plt()

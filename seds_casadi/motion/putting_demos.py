@@ -15,11 +15,14 @@ exactly at the ball.
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 
-from .demonstrations import Demonstrations
+from ..core._io import data_folder
+from ..core.demonstrations import Demonstrations, load_demonstrations
 
-__all__ = ["generate_putting_demos"]
+__all__ = ["generate_putting_demos", "load_hitting_demos", "HITTING_DEMOS_FILE"]
 
 
 def generate_putting_demos(n_demos: int = 7, rate: float = 20.0, hitting_speed: float = 1.0,
@@ -82,3 +85,20 @@ def generate_putting_demos(n_demos: int = 7, rate: float = 20.0, hitting_speed: 
         pos.append(P)
         vel.append(V)
     return Demonstrations(pos, velocities=vel, target=np.zeros(3), dt=1.0 / rate)
+
+
+#: the shipped putting demonstrations (7 demos, 3-D, 20 Hz, ball at the origin, hit along +x),
+#: made by ``generate_putting_demos(random_state=0)``
+HITTING_DEMOS_FILE = os.path.join(data_folder("seds_casadi.data"), "hitting_demos.npz")
+
+
+def load_hitting_demos(path: str | None = None) -> Demonstrations:
+    """The default putting demonstrations shipped with the package (or a file of your own).
+
+    Parameters
+    ----------
+    path : str, optional
+        A ``.npz`` or ``.csv`` demonstrations file (formats in :mod:`seds_casadi.core.demonstrations`)
+        with the ball at the origin. Default: the shipped set.
+    """
+    return load_demonstrations(path or HITTING_DEMOS_FILE, target=[0.0, 0.0, 0.0])

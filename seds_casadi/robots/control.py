@@ -32,9 +32,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .ball import BALL_RADIUS
-from .motion import HittingMotion, rotation_z
-from .robots import Robot
+from ..motion.golf import BALL_RADIUS
+from ..motion.hitting import HittingMotion, rotation_z
+from .models import Robot
 
 __all__ = ["SwingController", "SwingResult", "Gains", "simulate_swing", "place_head",
            "default_base", "place_robot", "gravity_ratio", "face_orientation",
@@ -185,7 +185,7 @@ class SwingController:
         self._margin = 0.05 * (robot.upper - robot.lower)
         self._effort = np.where(robot.effort > 0, robot.effort, np.inf)
         self._zeros = np.zeros(robot.nv)
-        from .kernels import FastEvaluator, compile_functions
+        from ..codegen import FastEvaluator, compile_functions
 
         self._step = FastEvaluator(compile_functions([_tick_function(self)])[0])
         self.q_ref = robot.q_home.copy()
@@ -454,7 +454,7 @@ def place_robot(name: str, ball_xy, field=None, **kwargs) -> Robot:
     """The robot ``name`` standing at its :func:`default_base` beside the ball at ``ball_xy``
     (field frame), on the field's surface there when ``field`` is given; ``kwargs`` go to
     :func:`seds_casadi.robots.load_robot`."""
-    from .robots import load_robot
+    from .models import load_robot
 
     base = np.asarray(default_base(name), float)
     base[:2] += np.asarray(ball_xy, float)[:2]

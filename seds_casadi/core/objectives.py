@@ -6,34 +6,25 @@ algorithmic differentiation, and map those small functions over the data with a 
 This keeps the symbolic graph independent of the number of samples (building takes milliseconds
 instead of seconds) while IPOPT still receives exact first and second derivatives.
 
-The kernels can be compiled to C with the system's C compiler (``cc``/``gcc``), which makes the
-Hessian about 10x faster than CasADi's virtual machine. Compiled kernels depend only on (K, d,
-objective, margin), not on the data, and are cached on disk by the hash of their C source (folder
-``$SEDS_CASADI_CACHE``, default ``~/.cache/seds_casadi``). Without a compiler, or with
-``SEDS_CASADI_JIT=0``, the same functions run in CasADi's virtual machine.
+The kernels can be compiled to C with the system's C compiler (``cc``/``gcc``, through
+:mod:`seds_casadi.codegen`), which makes the Hessian about 10x faster than CasADi's virtual
+machine. Compiled kernels depend only on (K, d, objective, margin), not on the data, and are
+cached on disk by the hash of their C source. Without a compiler, or with ``SEDS_CASADI_JIT=0``,
+the same functions run in CasADi's virtual machine.
 """
 
 from __future__ import annotations
 
-import hashlib
-import os
-import shutil
-import subprocess
-import tempfile
-import threading
-
 import casadi as ca
 import numpy as np
 
+from ..codegen import compile_functions
 from .gmm import logsumexp_parts_sx
 from .parametrization import DIRECTION_EPS, Layout
 
-__all__ = ["sample_objective", "SumKernels", "compiler_available", "cache_folder",
-           "approach_constraints", "FastEvaluator", "compile_functions"]
+__all__ = ["sample_objective", "SumKernels", "approach_constraints"]
 
 _LOG_2PI = float(np.log(2.0 * np.pi))
-_LOCK = threading.Lock()
-_LOADED: dict[str, tuple[ca.Function, ...]] = {}
 
 
 def _tril_sx(v: ca.SX, layout: Layout) -> ca.SX:
@@ -172,105 +163,6 @@ def approach_constraints(layout: Layout, margin: float, direction: np.ndarray,
     return ca.Function("approach", [theta], [ca.vertcat(eq, *minors)])
 
 
-def compiler_available() -> str | None:
-    """Path of a C compiler the kernels can be compiled with, or None."""
-    if os.environ.get("SEDS_CASADI_JIT", "1").strip().lower() in ("0", "false", "no", "off"):
-        return None
-    return shutil.which(os.environ.get("CC", "cc")) or shutil.which("gcc")
-
-
-def cache_folder() -> str:
-    """Folder of the compiled-kernel cache."""
-    root = os.environ.get("SEDS_CASADI_CACHE") or os.path.join(
-        os.path.expanduser("~"), ".cache", "seds_casadi")
-    return root
-
-
-def compile_functions(funcs: list[ca.Function], flags: tuple[str, ...] = ("-O1",)
-                      ) -> list[ca.Function]:
-    """Compile CasADi Functions to C (one shared library, cached by source hash) and load them.
-
-    Returns the functions unchanged when no compiler is available or compilation fails.
-    ``flags`` are the optimisation flags given to the compiler.
-    """
-    return _compile(funcs, tuple(flags))
-
-
-class FastEvaluator:
-    """Low-overhead calls of a CasADi Function through fixed numpy buffers (``Function.buffer``).
-
-    About 0.2 us of call overhead instead of about 10-30 us for ``f(x)`` from Python. Not
-    thread-safe: use one evaluator per thread.
-
-    Parameters
-    ----------
-    f : casadi.Function
-        Dense inputs and outputs.
-    """
-
-    def __init__(self, f: ca.Function) -> None:
-        self.function = f
-        self._in = [np.zeros(f.nnz_in(i)) for i in range(f.n_in())]
-        self._out = [np.zeros(f.nnz_out(i)) for i in range(f.n_out())]
-        self._buf, self._eval = f.buffer()
-        for i, a in enumerate(self._in):
-            self._buf.set_arg(i, memoryview(a))
-        for i, a in enumerate(self._out):
-            self._buf.set_res(i, memoryview(a))
-
-    def __call__(self, *args) -> np.ndarray:
-        """Evaluate; returns a copy of the first output as a flat array."""
-        if len(args) != len(self._in):
-            raise TypeError(f"{self.function.name()} takes {len(self._in)} arguments, "
-                            f"got {len(args)}")
-        for a, v in zip(self._in, args):
-            a[...] = v
-        self._eval()
-        return self._out[0].copy()
-
-
-def _compile(funcs: list[ca.Function], opt_flags: tuple[str, ...] = ("-O1",)
-             ) -> list[ca.Function]:
-    """Compile functions into one shared library (cached by source hash) and load them."""
-    cc = compiler_available()
-    if cc is None:
-        return funcs
-    gen = ca.CodeGenerator("seds_kernels.c", {"with_header": False})
-    for f in funcs:
-        gen.add(f)
-    tmpdir = tempfile.mkdtemp(prefix="seds_cg_")
-    try:
-        gen.generate(tmpdir + os.sep)
-        src_path = os.path.join(tmpdir, "seds_kernels.c")
-        with open(src_path, "rb") as fh:
-            src = fh.read()
-        flags = ["-shared", "-fPIC", *opt_flags]  # -O2 measured no faster for SEDS kernels
-        key = hashlib.sha256(src + ca.__version__.encode() + cc.encode()
-                             + " ".join(flags).encode()).hexdigest()[:24]
-        with _LOCK:
-            if key in _LOADED:
-                return list(_LOADED[key])
-            folder = cache_folder()
-            lib = os.path.join(folder, f"seds_kernels_{key}.so")
-            if not os.path.exists(lib):
-                os.makedirs(folder, exist_ok=True)
-                tmp_lib = os.path.join(tmpdir, "k.so")
-                try:
-                    subprocess.run([cc, *flags, src_path, "-o", tmp_lib],
-                                   check=True, capture_output=True, timeout=600)
-                except (subprocess.SubprocessError, OSError):
-                    return funcs  # fall back to the virtual machine; results are identical
-                fd, staged = tempfile.mkstemp(prefix=".k-", suffix=".so", dir=folder)
-                os.close(fd)
-                shutil.copyfile(tmp_lib, staged)
-                os.replace(staged, lib)
-            loaded = tuple(ca.external(f.name(), lib) for f in funcs)
-            _LOADED[key] = loaded
-            return list(loaded)
-    finally:
-        shutil.rmtree(tmpdir, ignore_errors=True)
-
-
 class SumKernels:
     """J, grad J and Hess J over a data set, from per-sample kernels mapped with a sum.
 
@@ -300,9 +192,9 @@ class SumKernels:
         fh = ca.Function("g_hess", [th, x, xd, c], [hess])
         funcs = [g, fg, fh]
         self.compiled = False
-        if compile and compiler_available():
-            compiled = _compile(funcs)
-            self.compiled = compiled is not funcs and compiled[0] is not g
+        if compile:
+            compiled = compile_functions(funcs)
+            self.compiled = compiled[0] is not g
             funcs = compiled
         n = X.shape[0]
         self._g = funcs[0].map("J_sum", "serial", n, [0], [0])

@@ -41,17 +41,12 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
+from ..core._io import data_folder
+
 __all__ = ["Field", "Surface", "load_field", "field_names", "FIELDS_FOLDER", "stimp_to_rho"]
 
-def _fields_folder() -> str:
-    here = os.path.dirname(os.path.abspath(__file__))
-    installed = os.path.join(here, "_fields")  # plain install: fields/ mapped into the package
-    return installed if os.path.isdir(installed) else os.path.join(os.path.dirname(here),
-                                                                     "fields")
-
-
-#: folder of the shipped field files (the repository's ``fields/``, installed with the package)
-FIELDS_FOLDER = _fields_folder()
+#: folder of the shipped field files (the repository's ``fields/``, installed as package data)
+FIELDS_FOLDER = data_folder("seds_casadi._fields")
 _STIMP = np.array([[6.0, 0.131], [8.0, 0.0985], [10.0, 0.0785], [12.0, 0.0655]])
 _SHAPES = ("plane", "hills", "arctan", "rough", "heightmap")
 

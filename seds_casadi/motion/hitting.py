@@ -59,12 +59,12 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from ._io import atomic_npz
-from .demonstrations import Demonstrations
-from .errors import ConvergenceWarning, SEDSError, SolverError
-from .gmm import gmr_predict, responsibilities_casadi
-from .seds import SEDS
-from .stable_ds import StableDS
+from ..core._io import atomic_npz
+from ..core.demonstrations import Demonstrations
+from ..core.errors import ConvergenceWarning, SEDSError, SolverError
+from ..core.gmm import gmr_predict, responsibilities_casadi
+from ..core.seds import SEDS
+from ..core.stable_ds import StableDS
 
 __all__ = ["TargetField", "StrengthFactor", "HittingMotion", "RolloutResult", "rotation_z",
            "approach_paths"]
@@ -174,7 +174,7 @@ class TargetField:
             raise TypeError(f"TargetField needs a StableDS, got {type(ds).__name__}")
         self.ds = ds
         d = ds.n_dims
-        from .gmm import responsibilities
+        from ..core.gmm import responsibilities
 
         h = responsibilities(ds.target[None], ds.priors, ds.means[:, :d],
                              ds.covariances[:, :d, :d])[0]
@@ -199,7 +199,7 @@ class TargetField:
     def velocity(self, X) -> np.ndarray:
         """f(x) = sum_k h^k(x) A_k (x - x*): Eq. 5 for a certified model (Eq. 10a makes
         mu_xdot^k + A_k (x - mu_x^k) = A_k (x - x*)), in the form without cancellation near x*."""
-        from .gmm import responsibilities
+        from ..core.gmm import responsibilities
 
         ds = self.ds
         d = ds.n_dims
@@ -713,7 +713,7 @@ class HittingMotion:
         about 2 us per call here against about 450 us for :meth:`velocity`; it falls back to
         CasADi's virtual machine without a C compiler. Not thread-safe.
         """
-        from .kernels import FastEvaluator, compile_functions
+        from ..codegen import FastEvaluator, compile_functions
 
         return FastEvaluator(compile_functions([self.to_casadi()])[0])
 

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .gmm import gmr_predict
+from ..core.gmm import gmr_predict
 
 __all__ = ["GPRModel", "GMRModel", "make_model", "MODELS", "gpr_param_count",
            "gmm_param_count"]

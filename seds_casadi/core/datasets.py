@@ -13,8 +13,7 @@ import numpy as np
 
 from .demonstrations import Demonstrations
 
-__all__ = ["LASA_SHAPES", "LASA_SINGLE_SHAPES", "load_lasa", "lasa_folder", "load_hitting_demos",
-           "HITTING_DEMOS_FILE"]
+__all__ = ["LASA_SHAPES", "LASA_SINGLE_SHAPES", "load_lasa", "lasa_folder"]
 
 LASA_SHAPES = (
     "Angle", "BendedLine", "CShape", "DoubleBendedLine", "GShape", "heee", "JShape", "JShape_2",
@@ -24,25 +23,6 @@ LASA_SHAPES = (
 )
 #: the 26 single-pattern shapes of the usual evaluation protocol (Multi_Models excluded)
 LASA_SINGLE_SHAPES = tuple(s for s in LASA_SHAPES if not s.startswith("Multi_Models"))
-
-
-#: the shipped putting demonstrations (7 demos, 3-D, 20 Hz, ball at the origin, hit along +x),
-#: made by ``generate_putting_demos(random_state=0)``
-HITTING_DEMOS_FILE = os.path.join(os.path.dirname(__file__), "data", "hitting_demos.npz")
-
-
-def load_hitting_demos(path: str | None = None) -> Demonstrations:
-    """The default putting demonstrations shipped with the package (or a file of your own).
-
-    Parameters
-    ----------
-    path : str, optional
-        A ``.npz`` or ``.csv`` demonstrations file (formats in :mod:`seds_casadi.demonstrations`)
-        with the ball at the origin. Default: the shipped set.
-    """
-    from .demonstrations import load_demonstrations
-
-    return load_demonstrations(path or HITTING_DEMOS_FILE, target=[0.0, 0.0, 0.0])
 
 
 def lasa_folder() -> str:

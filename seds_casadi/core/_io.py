@@ -50,3 +50,17 @@ def atomic_csv(path: str | os.PathLike, header: Iterable[str], rows: Iterable[It
     for row in rows:
         w.writerow([f"{v:.6g}" if isinstance(v, float) else v for v in row])
     atomic_text(path, buf.getvalue())
+
+
+def data_folder(package: str) -> str:
+    """File-system folder of a data package shipped with seds_casadi (through ``importlib``).
+
+    Parameters
+    ----------
+    package : {"seds_casadi._fields", "seds_casadi._robots", "seds_casadi.data"}
+        The repository's ``fields/`` and ``robots/`` are installed as the data packages
+        ``seds_casadi._fields`` and ``seds_casadi._robots`` (plain and editable installs alike).
+    """
+    from importlib.resources import files
+
+    return os.fspath(files(package))

@@ -23,21 +23,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..core._io import data_folder
+
 __all__ = ["Club", "Robot", "load_robot", "robot_names", "wam_urdf", "katana_urdf",
            "ROBOTS_FOLDER", "WAM_DH", "DEFAULT_CLUBS"]
 
 # ----------------------------------------------------------------------------- data files
 
 
-def _robots_folder() -> str:
-    here = os.path.dirname(os.path.abspath(__file__))
-    for cand in (os.path.join(here, "_robots"), os.path.join(os.path.dirname(here), "robots")):
-        if os.path.isdir(cand):
-            return cand
-    return os.path.join(here, "_robots")
-
-
-ROBOTS_FOLDER = _robots_folder()
+#: folder of the shipped URDFs (the repository's ``robots/``, installed as package data)
+ROBOTS_FOLDER = data_folder("seds_casadi._robots")
 
 #: libbarrett ``wam7w.conf``: standard DH (alpha, a, d) per joint, theta = q.
 WAM_DH = np.array([[-np.pi / 2, 0.0, 0.0], [np.pi / 2, 0.0, 0.0], [-np.pi / 2, 0.045, 0.55],

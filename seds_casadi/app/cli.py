@@ -22,9 +22,9 @@ __all__ = ["main", "build_parser"]
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``seds-casadi``."""
-    from .datasets import LASA_SHAPES
+    from ..core.datasets import LASA_SHAPES
+    from ..core.parametrization import OBJECTIVES
     from .lasa import PROTOCOLS
-    from .parametrization import OBJECTIVES
 
     p = argparse.ArgumentParser(
         prog="seds-casadi",
@@ -68,7 +68,7 @@ def build_parser() -> argparse.ArgumentParser:
     la.add_argument("--dask", default=None, metavar="ADDRESS",
                     help="run on a Dask scheduler (tcp://host:8786) instead of local workers")
 
-    from .table1 import TABLE1_FIELDS
+    from ..minigolf.table1 import TABLE1_FIELDS
 
     t = sub.add_parser("table1", help="reproduce the paper's Table 1 on the simulated fields",
                        description="Learn the hitting motion, let the teacher collect good "
@@ -125,9 +125,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _cmd_fit(a) -> int:
-    from .demonstrations import load_demonstrations
+    from ..core.demonstrations import load_demonstrations
+    from ..core.seds import SEDS
     from .plotting import _plt, plot_streamlines, save_figure
-    from .seds import SEDS
 
     kw = {"dt": a.dt} if a.dt is not None else {}
     demos = load_demonstrations(a.demonstrations, **kw)
@@ -175,7 +175,7 @@ def _cmd_table1(a) -> int:
 
 
 def _cmd_validate(a) -> int:
-    from .validation import validate
+    from .validate import validate
 
     validate(a.robot, a.field, a.shots, a.out, a.seed, progress=sys.stderr.isatty())
     return 0
@@ -196,7 +196,7 @@ def main(argv: list[str] | None = None) -> int:
     if a.command is None:
         parser.print_help()
         return 2
-    from .errors import ConvergenceWarning, SEDSError
+    from ..core.errors import ConvergenceWarning, SEDSError
 
     warnings.simplefilter("always", ConvergenceWarning)
     try:

@@ -22,12 +22,12 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from ._io import atomic_csv, atomic_text
-from .datasets import LASA_SHAPES, load_lasa
-from .errors import ConvergenceWarning
-from .metrics import direction_error, dtw_distance, velocity_rmse
-from .parametrization import OBJECTIVES
-from .seds import SEDS
+from ..core._io import atomic_csv, atomic_text
+from ..core.datasets import LASA_SHAPES, load_lasa
+from ..core.errors import ConvergenceWarning
+from ..core.metrics import direction_error, dtw_distance, velocity_rmse
+from ..core.parametrization import OBJECTIVES
+from ..core.seds import SEDS
 
 __all__ = ["LasaResult", "evaluate_shape", "run_lasa", "write_csv", "summary_table", "PROTOCOLS"]
 

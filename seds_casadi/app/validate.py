@@ -1,0 +1,161 @@
+"""``seds-casadi validate``: shots chosen by the learned hitting-parameter model, executed on a
+robot in Pinocchio and checked again in exudyn (:mod:`seds_casadi.sim`)."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from ..minigolf.ball import BALL_RADIUS
+from ..sim.exudyn_shot import simulate_shot_exudyn
+
+__all__ = ["validate", "VALIDATION_COLUMNS"]
+
+
+VALIDATION_COLUMNS = ("field", "robot", "shot", "sunk_fast", "sunk_exudyn",
+                      "impact_direction_error_deg", "impact_speed_error", "final_distance_m")
+
+
+def validate(robot_name: str = "wam", field_name: str = "flat", shots: int = 10,
+             out: str = "validate_out", seed: int = 0, progress: bool = True) -> list[dict]:
+    """``seds-casadi validate``: shots chosen by the learned hitting-parameter model (GPR on the
+    teacher's data set for the field), executed by the robot's 500 Hz controller on Pinocchio,
+    then played on the fast ball model and in exudyn; writes ``validation.csv``,
+    ``report.txt`` and ``validation.png`` into ``out``.
+
+    Returns the rows of ``validation.csv``.
+    """
+    import time
+
+    from ..core._io import atomic_csv, atomic_text
+    from ..minigolf.ball import impact, simulate_shots
+    from ..minigolf.fields import load_field
+    from ..minigolf.parameters import make_model
+    from ..minigolf.teacher import Stroke, collect_dataset
+    from ..motion.hitting import HittingMotion
+    from ..motion.putting_demos import load_hitting_demos
+    from ..robots.control import place_robot, simulate_swing
+
+    if int(shots) < 1:
+        raise ValueError(f"shots must be at least 1, got {shots}")
+    fld = load_field(field_name)
+    os.makedirs(out, exist_ok=True)
+    rng = np.random.default_rng(seed)
+    t0 = time.perf_counter()
+    motion = HittingMotion.fit(load_hitting_demos(), n_components=3)
+    stroke = Stroke.from_motion(motion)
+    data = collect_dataset(fld, stroke, resolution=(121, 41))
+    model = make_model("gpr").fit(data.situations, data.outputs)
+    print(f"hitting motion, teacher ({len(data)} good shots) and GPR: "
+          f"{time.perf_counter() - t0:.1f} s", flush=True)
+
+    def placed(ball_xy):
+        # the robot stands at its default place beside each ball, on the surface
+        return place_robot(robot_name, ball_xy, fld)
+
+    lo, hi = data.hole.min(axis=0), data.hole.max(axis=0)
+    rows, paths = [], []
+    it = range(int(shots))
+    if progress:
+        from tqdm.auto import tqdm
+
+        it = tqdm(it, desc=f"validate {robot_name} on {fld.name}", unit="shot")
+    wall, simulated = 0.0, 0.0
+    for i in it:
+        hole = lo + rng.uniform(size=2) * (hi - lo)
+        ball = data.ball[0] if np.ptp(data.ball, axis=0).max() == 0 else \
+            data.ball.min(axis=0) + rng.uniform(size=2) * np.ptp(data.ball, axis=0)
+        pred = model.predict((hole - ball)[None])[0]
+        alpha = np.deg2rad(pred[0])
+        kappa = float(pred[1]) if len(pred) > 1 else float(data.kappa[0])
+        z = float(fld.surface.height(ball[None])[0]) + BALL_RADIUS
+        swing = simulate_swing(placed(ball), motion, np.array([ball[0], ball[1], z]), alpha,
+                               kappa)
+        row = {"field": fld.name, "robot": robot_name, "shot": i}
+        if not swing.hit:
+            row.update(sunk_fast=False, sunk_exudyn=False, impact_direction_error_deg=np.nan,
+                       impact_speed_error=np.nan, final_distance_m=np.nan)
+            rows.append(row)
+            paths.append(None)
+            continue
+        vc = swing.hit_velocity
+        # the face as the robot holds it (five joints cannot keep it square) and the arm's
+        # effective mass at the face
+        launch = impact(vc[None], face_normal=swing.face_normal[None],
+                        club_mass=swing.effective_mass)
+        fast = simulate_shots(fld, ball[None], launch, hole=hole, engine="numpy",
+                              record_paths=True)
+        # the same swing in exudyn: the arm as a kinematic tree under the same controller,
+        # the ball struck by the club face's contact sphere
+        ex = simulate_shot_exudyn(fld, ball, hole=hole, arm={
+            "robot": placed(ball), "motion": motion, "alpha": alpha, "kappa": kappa})
+        if not ex.hit:
+            row.update(sunk_fast=bool(fast.sunk[0]), sunk_exudyn=False,
+                       impact_direction_error_deg=np.nan, impact_speed_error=np.nan,
+                       final_distance_m=np.nan)
+            rows.append(row)
+            paths.append(None)
+            continue
+        wall += ex.wall_time
+        simulated += ex.simulated_time
+        a, b2 = ex.launch_velocity, launch[0]
+        cosang = a @ b2 / max(np.linalg.norm(a) * np.linalg.norm(b2), 1e-12)
+        row.update(sunk_fast=bool(fast.sunk[0]), sunk_exudyn=bool(ex.sunk),
+                   impact_direction_error_deg=float(np.degrees(np.arccos(np.clip(cosang, -1, 1)))),
+                   impact_speed_error=float(abs(np.linalg.norm(a) / np.linalg.norm(b2) - 1)),
+                   final_distance_m=float(np.linalg.norm(ex.final_position
+                                                         - fast.final_position[0])))
+        rows.append(row)
+        paths.append((fast.paths[0], ex.path[:, 1:], hole, ball, swing, ex))
+    atomic_csv(os.path.join(out, "validation.csv"), VALIDATION_COLUMNS,
+               ([r[c] for c in VALIDATION_COLUMNS] for r in rows))
+    hit = [r for r in rows if np.isfinite(r["impact_speed_error"])]
+    agree = np.mean([r["sunk_fast"] == r["sunk_exudyn"] for r in rows])
+    lines = [f"validation of {robot_name} on {fld.name}: {len(rows)} shots, {len(hit)} hit",
+             f"sinks agree: {agree:.0%} (fast sank {sum(r['sunk_fast'] for r in rows)}, "
+             f"exudyn sank {sum(r['sunk_exudyn'] for r in rows)})"]
+    if hit:
+        lines += [
+            f"impact direction error: max {max(r['impact_direction_error_deg'] for r in hit):.2f}"
+            f" deg (target 2)",
+            f"impact speed error: max {max(r['impact_speed_error'] for r in hit):.1%} "
+            f"(target 10 %)",
+            f"final distance: median {np.median([r['final_distance_m'] for r in hit]):.3f} m, "
+            f"max {max(r['final_distance_m'] for r in hit):.3f} m",
+            f"exudyn speed: {simulated / max(wall, 1e-9):.2f} simulated s per wall s"]
+    text = "\n".join(lines) + "\n"
+    atomic_text(os.path.join(out, "report.txt"), text)
+    _report_figure(fld, paths, os.path.join(out, "validation.png"))
+    print(text, end="")
+    return rows
+
+
+def _report_figure(fld, paths, path):
+    from .plotting import _plt, plot_field, save_figure
+
+    plt = _plt()
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(14, 3.8), gridspec_kw={"width_ratios": [2.2, 1]})
+    plot_field(fld, ax=a1)
+    for k, p in enumerate(paths):
+        if p is None:
+            continue
+        fast, ex, hole, ball, swing, shot = p
+        c = plt.rcParams["axes.prop_cycle"].by_key()["color"][k % 10]
+        a1.plot(fast[:, 0], fast[:, 1], "-", color=c, lw=1)
+        a1.plot(ex[:, 0], ex[:, 1], "--", color=c, lw=1)
+        a1.add_patch(plt.Circle(hole, fld.hole_radius, color=c, fill=False, lw=1))
+        v = np.linalg.norm(np.gradient(swing.head, swing.t, axis=0), axis=1)
+        a2.plot(swing.t - swing.hit_time, v, "-", color=c, lw=1)
+        if len(shot.head_speed):
+            a2.plot(shot.head_speed[:, 0] - shot.contact_time, shot.head_speed[:, 1], ":",
+                    color=c, lw=1.2)
+    a1.set_title("ball paths: fast model (solid), exudyn (dashed)", fontsize=9)
+    a2.set_xlim(-0.3, 0.15)
+    a2.set_xlabel("time from the hit [s]")
+    a2.set_ylabel("club-head speed [m/s]")
+    a2.set_title("club-head speed: Pinocchio swing (solid), exudyn arm (dotted)", fontsize=9)
+    save_figure(fig, path)
+
+
+# ---------------------------------------------------------------------------- the arm in exudyn

@@ -1,0 +1,14 @@
+"""Code generation: CasADi Functions compiled to C and loaded back, a low-overhead numeric
+evaluator, batched evaluation of point-wise Functions, and the vectorised (SIMD) loop generated
+from an SX step function, all through one compile-and-cache helper
+(:func:`~seds_casadi.codegen.cache.shared_library`). The lowest layer: it imports only casadi
+and numpy, and every other layer may use it.
+"""
+
+from .cache import CompileError, cache_folder, compiler_available, shared_library
+from .functions import FastEvaluator, batch_evaluate, compile_functions
+from .simd import SimdLoop, UnsupportedOperation, simd_source
+
+__all__ = ["compile_functions", "FastEvaluator", "batch_evaluate", "compiler_available",
+           "cache_folder", "shared_library", "CompileError", "SimdLoop", "UnsupportedOperation",
+           "simd_source"]

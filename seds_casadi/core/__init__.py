@@ -1,0 +1,19 @@
+"""The SEDS core: demonstrations and their preprocessing, the parametrization of the constrained
+problem, the per-sample objectives (Eq. 9 and the original SEDS objectives) with their exact
+derivatives, the learner (CasADi + IPOPT), the certified model ``StableDS`` (Eq. 5, Eq. 10),
+GMM/GMR, the metrics and the LASA data set. It needs only casadi, numpy, scipy, scikit-learn
+(and the LASA data package); it may import :mod:`seds_casadi.codegen` and nothing else of the
+package.
+"""
+
+from .datasets import LASA_SHAPES, LASA_SINGLE_SHAPES, load_lasa
+from .demonstrations import Demonstrations, load_demonstrations, save_demonstrations
+from .errors import ConvergenceWarning, ModelFileError, SEDSError, SolverError, StabilityError
+from .seds import SEDS, SEDSProblem
+from .stable_ds import StableDS, certify
+
+__all__ = [
+    "Demonstrations", "load_demonstrations", "save_demonstrations", "SEDS", "SEDSProblem",
+    "StableDS", "certify", "load_lasa", "LASA_SHAPES", "LASA_SINGLE_SHAPES", "SEDSError",
+    "SolverError", "StabilityError", "ModelFileError", "ConvergenceWarning",
+]

@@ -1,0 +1,1 @@
+"""Data package ``seds_casadi.data``: the shipped putting demonstrations."""
