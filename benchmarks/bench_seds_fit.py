@@ -34,7 +34,7 @@ def fit_times(shapes, K, n_samples):
         t0 = time.perf_counter()
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", ConvergenceWarning)
-            m = SEDS(K, objective="direction", random_state=0).fit(demos)
+            m = SEDS(K, objective="direction", random_state=0).fit(demos).model_
         sec = time.perf_counter() - t0
         X, V = np.concatenate(demos.positions), np.concatenate(demos.velocities)
         rows.append((s, sec, m.fit_info["iterations"], direction_error(m.predict(X), V),
@@ -51,7 +51,7 @@ def baseline(shape, K, n_samples, objective):
     t0 = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
-        model = seds.fit(demos)
+        model = seds.fit(demos).model_
     t_ours = time.perf_counter() - t0
     J_ours = model.fit_info["objective"]
 

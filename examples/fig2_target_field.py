@@ -23,7 +23,7 @@ ap.add_argument("--quick", action="store_true", help="smaller data for CI")
 args = ap.parse_args()
 
 demos = load_lasa("Angle", n_samples=30 if args.quick else 100)
-ds = SEDS(n_components=2, objective="direction", random_state=0).fit(demos)
+ds = SEDS(n_components=2, objective="direction", random_state=0).fit(demos).model_
 h = TargetField(ds, approach=np.mean([v[-1] for v in demos.velocities], axis=0))
 
 P = np.concatenate(demos.positions)

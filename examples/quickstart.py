@@ -20,7 +20,8 @@ ap.add_argument("--quick", action="store_true", help="smaller data for CI")
 args = ap.parse_args()
 
 demos = load_lasa("CShape", n_samples=30 if args.quick else 100)
-model = SEDS(n_components=3 if args.quick else 5, objective="direction", random_state=0).fit(demos)
+learner = SEDS(n_components=3 if args.quick else 5, objective="direction", random_state=0)
+model = learner.fit(demos).model_  # the certified StableDS
 print(model, model.fit_info["status"], f"{model.fit_info['seconds']:.2f} s")
 
 starts = [p[0] for p in demos.positions]

@@ -134,7 +134,7 @@ def test_a_spiralling_model_has_no_target_field():
 
     A = np.array([[-1.0, -3.0], [3.0, -1.0]])
     d = linear_demos(A, np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.3]]), dt=0.05, steps=40)
-    ds = SEDS(1, objective="mse", random_state=0).fit(d)
+    ds = SEDS(1, objective="mse", random_state=0).fit(d).model_
     with pytest.raises(ValueError, match="spirals"):
         TargetField(ds)
 

@@ -47,7 +47,7 @@ def fitted(spiral_demos, curved_demos_3d):
         for obj in OBJECTIVES:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", ConvergenceWarning)
-                out[name, obj] = SEDS(2, objective=obj, random_state=0).fit(demos)
+                out[name, obj] = SEDS(2, objective=obj, random_state=0).fit(demos).model_
     return out
 
 
@@ -81,7 +81,7 @@ def test_rollouts_from_far_away_converge_to_the_target(fitted, data):
 
 def test_known_linear_system_is_recovered(spiral_demos):
     """Data from xdot = A x with A stable: a one-Gaussian MSE fit recovers A."""
-    model = SEDS(1, objective="mse", random_state=0).fit(spiral_demos)
+    model = SEDS(1, objective="mse", random_state=0).fit(spiral_demos).model_
     np.testing.assert_allclose(model.A[0], [[-1.0, -2.0], [2.0, -1.0]], atol=1e-3)
     assert model.fit_info["objective"] < 1e-6
 
@@ -93,15 +93,15 @@ def test_direction_objective_fits_directions_better_than_mse():
     for obj in ("direction", "mse"):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", ConvergenceWarning)
-            m = SEDS(3, objective=obj, random_state=0).fit(demos)
+            m = SEDS(3, objective=obj, random_state=0).fit(demos).model_
         errs[obj] = direction_error(m.predict(X), V)
     assert errs["direction"] < errs["mse"]
     assert errs["direction"] < 0.05
 
 
 def test_fit_is_deterministic_for_a_seed(spiral_demos):
-    a = SEDS(2, random_state=3).fit(spiral_demos)
-    b = SEDS(2, random_state=3).fit(spiral_demos)
+    a = SEDS(2, random_state=3).fit(spiral_demos).model_
+    b = SEDS(2, random_state=3).fit(spiral_demos).model_
     np.testing.assert_array_equal(a.means, b.means)
     np.testing.assert_array_equal(a.covariances, b.covariances)
 
@@ -112,7 +112,7 @@ def test_seven_dimensional_joint_space():
     from conftest import linear_demos
 
     demos = linear_demos(A, rng.standard_normal((2, 7)), dt=0.1, steps=30)
-    model = SEDS(1, objective="direction", random_state=0, compile=False).fit(demos)
+    model = SEDS(1, objective="direction", random_state=0, compile=False).fit(demos).model_
     _assert_certified(model)
     X, V, _, _ = demos.stacked()
     assert direction_error(model.predict(X + demos.target), V) < 1e-3
@@ -205,7 +205,7 @@ def test_certificate_names_each_violated_constraint():
 
 def test_iteration_limit_warns_or_raises(spiral_demos):
     with pytest.warns(ConvergenceWarning, match="without converging"):
-        m = SEDS(2, objective="mse", random_state=0, max_iter=2).fit(spiral_demos)
+        m = SEDS(2, objective="mse", random_state=0, max_iter=2).fit(spiral_demos).model_
     _assert_certified(m)
     assert m.fit_info["success"] is False
     with pytest.raises(SolverError, match="Maximum_Iterations_Exceeded"):
@@ -223,14 +223,18 @@ def test_iteration_limit_warns_or_raises(spiral_demos):
         (dict(n_components=2, omega_lower=0.0), ValueError, "omega_lower"),
     ],
 )
-def test_bad_settings(kwargs, exc, match):
+def test_bad_settings_are_refused_by_fit(kwargs, exc, match, spiral_demos):
+    learner = SEDS(**kwargs)  # scikit-learn convention: __init__ only stores
+    assert learner.get_params()["n_components"] == kwargs["n_components"]
     with pytest.raises(exc, match=match):
-        SEDS(**kwargs)
+        learner.fit(spiral_demos)
 
 
 def test_bad_data_for_fit(spiral_demos):
     with pytest.raises(TypeError, match="Demonstrations"):
         SEDS(2).fit(np.zeros((10, 2)))
+    with pytest.raises(ValueError, match="one velocity per position"):
+        SEDS(2).fit(np.zeros((10, 2)), np.zeros((9, 2)))
     tiny = Demonstrations([np.stack([np.linspace(1, 0, 5), np.zeros(5)], 1)], dt=0.1)
     with pytest.raises(ValueError, match="too few"):
         SEDS(8).fit(tiny)
@@ -253,7 +257,8 @@ def test_approach_constraint_holds_after_fitting(curved_demos_3d):
 
     u = np.array([1.0, -0.4, 0.2])
     u /= np.linalg.norm(u)
-    model = SEDS(2, random_state=0, approach_direction=u, approach_ratio=3.0).fit(curved_demos_3d)
+    model = SEDS(2, random_state=0, approach_direction=u,
+                 approach_ratio=3.0).fit(curved_demos_3d).model_
     _assert_certified(model)
     h = responsibilities(model.target[None], model.priors, model.means[:, :3],
                          model.covariances[:, :3, :3])[0]
@@ -265,8 +270,8 @@ def test_approach_constraint_holds_after_fitting(curved_demos_3d):
     M = Q.T @ J @ Q
     assert np.linalg.eigvalsh(0.5 * (M + M.T)).max() <= -3.0 * lam * (1 - 1e-6)
     with pytest.raises(ValueError, match="approach_ratio"):
-        SEDS(2, approach_direction=u, approach_ratio=0.5)
+        SEDS(2, approach_direction=u, approach_ratio=0.5).fit(curved_demos_3d)
     with pytest.raises(ValueError, match="approach_direction"):
-        SEDS(2, approach_direction=[0.0, 0.0, 0.0])
+        SEDS(2, approach_direction=[0.0, 0.0, 0.0]).fit(curved_demos_3d)
     with pytest.raises(ValueError, match="entries"):
         SEDS(2, approach_direction=[1.0, 0.0]).fit(curved_demos_3d)

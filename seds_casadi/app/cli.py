@@ -133,7 +133,7 @@ def _cmd_fit(a) -> int:
     demos = load_demonstrations(a.demonstrations, **kw)
     print(f"loaded {demos}")
     model = SEDS(a.components, objective=a.objective, random_state=a.seed,
-                 max_iter=a.max_iter).fit(demos)
+                 max_iter=a.max_iter).fit(demos).model_
     os.makedirs(a.out, exist_ok=True)
     path = os.path.join(a.out, "model.npz")
     model.save(path)

@@ -90,7 +90,7 @@ def evaluate_shape(shape: str, objective: str = "direction", protocol: str = "al
     t0 = time.perf_counter()
     with warnings.catch_warnings():  # the status is recorded and counted in the summary
         warnings.simplefilter("ignore", ConvergenceWarning)
-        model = SEDS(n_components, objective=objective, random_state=random_state).fit(train)
+        model = SEDS(n_components, objective=objective, random_state=random_state).fit(train).model_
     seconds = time.perf_counter() - t0
     X = np.concatenate(test.positions)
     V = np.concatenate(test.velocities)

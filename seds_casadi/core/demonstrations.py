@@ -220,6 +220,43 @@ class Demonstrations:
         obj._set(positions, velocities, target, shifts)
         return obj
 
+    @classmethod
+    def from_samples(cls, X, Xdot, target=None) -> Demonstrations:
+        """Samples without time order (e.g. a cross-validation fold) as one set, unprocessed.
+
+        Parameters
+        ----------
+        X : array, shape (n_samples, d)
+            Positions.
+        Xdot : array, shape (n_samples, d)
+            Velocities at those positions.
+        target : array, shape (d,), optional
+            The attractor (default: the origin).
+
+        Returns
+        -------
+        Demonstrations
+            One "demonstration" holding the samples as given (no smoothing, trimming or
+            shifting). Its samples carry no phase, so the direction objective weights them
+            uniformly (Eq. 11 needs the time order within each demonstration).
+        """
+        X = np.asarray(X, dtype=float)
+        V = np.asarray(Xdot, dtype=float)
+        if X.ndim != 2 or X.shape[0] < 2 or X.shape[1] < 1:
+            raise ValueError(f"X must have shape (n_samples >= 2, d), got {X.shape}")
+        if V.shape != X.shape:
+            raise ValueError(f"the velocities have shape {V.shape}, the positions {X.shape}; "
+                             "give one velocity per position")
+        if not (np.all(np.isfinite(X)) and np.all(np.isfinite(V))):
+            raise ValueError("the samples contain NaN or infinite values")
+        d = X.shape[1]
+        tgt = np.zeros(d) if target is None else np.asarray(target, dtype=float).ravel()
+        if tgt.shape != (d,) or not np.all(np.isfinite(tgt)):
+            raise ValueError(f"target must be a finite array of shape ({d},), got {target!r}")
+        obj = cls._from_processed([X.copy()], [V.copy()], tgt, [tgt], None)
+        obj._phase = np.zeros(len(X))
+        return obj
+
     # ------------------------------------------------------------------ views
     @property
     def n_demos(self) -> int:
@@ -250,7 +287,9 @@ class Demonstrations:
         """
         X = np.concatenate(self.shifted_positions)
         Xd = np.concatenate(self.velocities)
-        phase = np.concatenate([np.linspace(0.0, 1.0, len(p)) for p in self.positions])
+        phase = getattr(self, "_phase", None)
+        if phase is None or len(phase) != len(X):
+            phase = np.concatenate([np.linspace(0.0, 1.0, len(p)) for p in self.positions])
         demo = np.concatenate([np.full(len(p), n) for n, p in enumerate(self.positions)])
         return X, Xd, phase, demo
 

@@ -1,45 +1,177 @@
-"""Gaussian mixture helpers in plain numpy: densities, responsibilities and regression (GMR).
+"""Gaussian mixtures: responsibilities (Eq. 6) and Gaussian mixture regression (Eq. 5, 12).
 
-All functions are vectorised over samples and numerically stable (log-sum-exp), so they can be
-evaluated far from the data without underflow or NaN.
+Each formula is written once, as a CasADi SX expression of a symbolic point
+(:func:`responsibilities_sx`, :func:`gmr_sx`); :func:`gmr_function` wraps it in a
+``casadi.Function`` and :func:`responsibilities` / :func:`gmr_predict` evaluate it numerically over
+many points at once (CasADi's map over columns, no Python loop). The same expressions are used for
+code generation (the hitting motion, the controller), so numbers and symbols cannot drift apart.
+
+The responsibilities are stabilised by log-sum-exp, so they stay finite and sum to one far from
+the data. A plain numpy implementation is kept in the tests as an oracle.
 """
 
 from __future__ import annotations
 
+import casadi as ca
 import numpy as np
 
-__all__ = ["log_gaussian", "responsibilities", "gmr_predict", "responsibilities_casadi",
+from ..codegen import batch_evaluate
+
+__all__ = ["responsibilities", "responsibilities_sx", "gmr_sx", "gmr_function", "gmr_predict",
            "logsumexp_parts_sx"]
 
-_LOG_2PI = float(np.log(2.0 * np.pi))
+
+def logsumexp_parts_sx(logp: list):
+    """Stabilised pieces of log-sum-exp over a list of SX terms: (m, [exp(a - m)], sum).
+
+    log sum_k exp(a_k) = m + log(sum); m = max_k a_k keeps every exponential in (0, 1].
+    """
+    m = logp[0]
+    for a in logp[1:]:
+        m = ca.fmax(m, a)
+    e = [ca.exp(a - m) for a in logp]
+    total = e[0]
+    for v in e[1:]:
+        total = total + v
+    return m, e, total
 
 
-def log_gaussian(X: np.ndarray, mean: np.ndarray, cov: np.ndarray) -> np.ndarray:
-    """Log density of a multivariate normal at many points.
+def _check_gmm(priors, means, covariances) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    priors = np.asarray(priors, dtype=float).ravel()
+    means = np.atleast_2d(np.asarray(means, dtype=float))
+    covariances = np.asarray(covariances, dtype=float)
+    K, n = means.shape
+    if priors.shape != (K,) or covariances.shape != (K, n, n):
+        raise ValueError(f"inconsistent GMM shapes: priors {priors.shape}, means {means.shape}, "
+                         f"covariances {covariances.shape}; expected ({K},), ({K}, n), ({K}, n, n)")
+    return priors, means, covariances
+
+
+def responsibilities_sx(x, priors, means, covariances) -> list:
+    """Posterior weights h^k(x) of each component (paper Eq. 6) as SX expressions.
+
+    h^k(x) = pi_k N(x; mu_k, Sigma_k) / sum_i pi_i N(x; mu_i, Sigma_i), by log-sum-exp.
 
     Parameters
     ----------
-    X : array, shape (n_samples, n_dims)
-    mean : array, shape (n_dims,)
-    cov : array, shape (n_dims, n_dims)
+    x : casadi.SX, shape (n_dims, 1)
+        Symbolic point.
+    priors : array, shape (n_components,)
+    means : array, shape (n_components, n_dims)
+    covariances : array, shape (n_components, n_dims, n_dims)
         Symmetric positive definite.
 
     Returns
     -------
-    array, shape (n_samples,)
+    list of casadi.SX
+        The K weights, summing to one.
     """
-    L = np.linalg.cholesky(cov)
-    diff = (X - mean).T
-    z = np.linalg.solve(L, diff) if diff.size else diff
-    maha = np.sum(z * z, axis=0)
-    logdet = 2.0 * np.sum(np.log(np.diag(L)))
-    return -0.5 * (maha + logdet + mean.shape[0] * _LOG_2PI)
+    priors, means, covariances = _check_gmm(priors, means, covariances)
+    logp = []
+    for k in range(len(priors)):
+        L = np.linalg.cholesky(covariances[k])
+        z = ca.DM(np.linalg.inv(L)) @ (x - ca.DM(means[k]))
+        logp.append(float(np.log(priors[k]) - np.sum(np.log(np.diag(L)))) - 0.5 * ca.sumsqr(z))
+    _, e, total = logsumexp_parts_sx(logp)
+    return [v / total for v in e]
 
 
-def responsibilities(
-    X: np.ndarray, priors: np.ndarray, means: np.ndarray, covariances: np.ndarray
-) -> np.ndarray:
-    """Posterior weights h^k(x) of each component (paper Eq. 6), by log-sum-exp.
+def gmr_sx(x, priors, means, covariances, in_idx, out_idx, with_cov: bool = False):
+    """Gaussian mixture regression E[y | x] (paper Eq. 5 and 12) as SX, optionally Cov[y | x].
+
+    E[y | x] = sum_k h^k(x) (mu_y^k + Sigma_yx^k (Sigma_x^k)^-1 (x - mu_x^k)); the covariance is the
+    law of total variance over the components.
+
+    Parameters
+    ----------
+    x : casadi.SX, shape (n_in, 1)
+    priors, means, covariances : the joint GMM over (x, y)
+        Shapes (K,), (K, n), (K, n, n).
+    in_idx, out_idx : sequences of int
+        Indices of the input and output dimensions in the joint space.
+    with_cov : bool
+        Also return the conditional covariance.
+
+    Returns
+    -------
+    mean : casadi.SX, shape (n_out, 1)
+    cov : casadi.SX, shape (n_out, n_out), only if ``with_cov``
+    """
+    priors, means, covariances = _check_gmm(priors, means, covariances)
+    i, o = np.asarray(in_idx, dtype=int), np.asarray(out_idx, dtype=int)
+    h = responsibilities_sx(x, priors, means[:, i], covariances[:, i][:, :, i])
+    mean_k, cond_k = [], []
+    for k in range(len(priors)):
+        s_oi = covariances[k][np.ix_(o, i)]
+        gain = np.linalg.solve(covariances[k][np.ix_(i, i)], s_oi.T).T  # Sigma_oi Sigma_ii^-1
+        mean_k.append(ca.DM(means[k, o]) + ca.DM(gain) @ (x - ca.DM(means[k, i])))
+        cond_k.append(covariances[k][np.ix_(o, o)] - gain @ s_oi.T)
+    mean = sum((h[k] * mean_k[k] for k in range(1, len(h))), h[0] * mean_k[0])
+    if not with_cov:
+        return mean
+    cov = ca.SX.zeros(len(o), len(o))
+    for k in range(len(h)):
+        dev = mean_k[k] - mean
+        cov = cov + h[k] * (ca.DM(cond_k[k]) + dev @ dev.T)
+    return mean, cov
+
+
+def gmr_function(priors, means, covariances, in_idx, out_idx, with_cov: bool = False,
+                 name: str = "gmr") -> ca.Function:
+    """:func:`gmr_sx` as a ``casadi.Function`` x (n_in,) -> mean (n_out,) [, cov (n_out^2,)].
+
+    The covariance output is the (n_out, n_out) matrix flattened column-major (symmetric, so
+    the order does not matter).
+    """
+    x = ca.SX.sym("x", len(in_idx))
+    out = gmr_sx(x, priors, means, covariances, in_idx, out_idx, with_cov)
+    if with_cov:
+        return ca.Function(name, [x], [out[0], ca.vec(out[1])], ["x"], ["mean", "cov"])
+    return ca.Function(name, [x], [out], ["x"], ["mean"])
+
+
+def _points(X, n_in: int) -> np.ndarray:
+    X = np.asarray(X, dtype=float)
+    X2 = X.reshape(1, -1) if X.ndim == 1 else X
+    if X2.ndim != 2 or X2.shape[1] != n_in:
+        raise ValueError(f"X must have shape (n, {n_in}), got {X.shape}")
+    return X2
+
+
+def gmr_predict(X, priors, means, covariances, in_idx, out_idx, return_cov: bool = False,
+                function: ca.Function | None = None):
+    """Evaluate Gaussian mixture regression (:func:`gmr_sx`) at many points.
+
+    Parameters
+    ----------
+    X : array, shape (n_samples, n_in)
+    priors, means, covariances : the joint GMM over (x, y)
+    in_idx, out_idx : sequences of int
+    return_cov : bool
+        Also return Cov[y | x].
+    function : casadi.Function, optional
+        A prebuilt :func:`gmr_function` of this GMM (saves rebuilding it on every call).
+
+    Returns
+    -------
+    mean : array, shape (n_samples, n_out)
+    cov : array, shape (n_samples, n_out, n_out), only if ``return_cov``
+    """
+    X2 = _points(X, len(in_idx))
+    f = function or gmr_function(priors, means, covariances, in_idx, out_idx, return_cov)
+    if len(X2) == 0:
+        n_out = len(out_idx)
+        return (np.zeros((0, n_out)), np.zeros((0, n_out, n_out))) if return_cov \
+            else np.zeros((0, n_out))
+    outs = batch_evaluate(f, X2.T)
+    if not return_cov:
+        return outs[0]
+    n_out = len(out_idx)
+    return outs[0], outs[1].reshape(-1, n_out, n_out)
+
+
+def responsibilities(X, priors, means, covariances) -> np.ndarray:
+    """Evaluate the responsibilities h^k(x) of Eq. 6 (:func:`responsibilities_sx`) at many points.
 
     Parameters
     ----------
@@ -53,103 +185,10 @@ def responsibilities(
     array, shape (n_samples, n_components)
         Rows sum to one.
     """
-    logp = np.stack(
-        [np.log(priors[k]) + log_gaussian(X, means[k], covariances[k]) for k in range(len(priors))],
-        axis=1,
-    )
-    logp -= logp.max(axis=1, keepdims=True)
-    w = np.exp(logp)
-    return w / w.sum(axis=1, keepdims=True)
-
-
-def gmr_predict(
-    X: np.ndarray,
-    priors: np.ndarray,
-    means: np.ndarray,
-    covariances: np.ndarray,
-    in_idx: np.ndarray,
-    out_idx: np.ndarray,
-    return_cov: bool = False,
-) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
-    """Gaussian mixture regression E[y | x] (paper Eq. 5 and 12), optionally with Cov[y | x].
-
-    Parameters
-    ----------
-    X : array, shape (n_samples, n_in)
-    priors, means, covariances : the joint GMM over (x, y)
-    in_idx, out_idx : array of int
-        Indices of the input and output dimensions in the joint space.
-    return_cov : bool
-        Also return the conditional covariance (law of total variance over components).
-
-    Returns
-    -------
-    mean : array, shape (n_samples, n_out)
-    cov : array, shape (n_samples, n_out, n_out), only if ``return_cov``
-    """
-    in_idx = np.asarray(in_idx)
-    out_idx = np.asarray(out_idx)
-    mu_in = means[:, in_idx]
-    cov_in = covariances[:, in_idx][:, :, in_idx]
-    h = responsibilities(X, priors, mu_in, cov_in)
-    n, K = h.shape
-    means_k = np.empty((K, n, len(out_idx)))
-    conds = []
-    for k in range(K):
-        s_oi = covariances[k][np.ix_(out_idx, in_idx)]
-        gain = np.linalg.solve(cov_in[k], s_oi.T).T  # Sigma_oi Sigma_ii^-1
-        means_k[k] = means[k, out_idx] + (X - mu_in[k]) @ gain.T
-        if return_cov:
-            conds.append(covariances[k][np.ix_(out_idx, out_idx)] - gain @ s_oi.T)
-    mean = np.einsum("nk,kno->no", h, means_k)
-    if not return_cov:
-        return mean
-    cov = np.einsum("nk,kop->nop", h, np.stack(conds))
-    dev = means_k - mean[None]
-    cov += np.einsum("nk,kno,knp->nop", h, dev, dev)
-    return mean, cov
-
-
-def responsibilities_casadi(x, priors: np.ndarray, means: np.ndarray, covariances: np.ndarray):
-    """Posterior weights h^k(x) of Eq. 6 as CasADi SX expressions of a symbolic point x.
-
-    Same log-sum-exp stabilisation as :func:`responsibilities` (numeric GMM, symbolic x).
-
-    Parameters
-    ----------
-    x : casadi.SX, shape (d, 1)
-    priors : array, shape (K,)
-    means : array, shape (K, d)
-    covariances : array, shape (K, d, d)
-
-    Returns
-    -------
-    list of casadi.SX
-        The K weights, summing to one.
-    """
-    import casadi as ca
-
-    logp = []
-    for k in range(len(priors)):
-        L = np.linalg.cholesky(covariances[k])
-        z = ca.DM(np.linalg.inv(L)) @ (x - ca.DM(means[k]))
-        logp.append(float(np.log(priors[k]) - np.sum(np.log(np.diag(L)))) - 0.5 * ca.sumsqr(z))
-    _, e, total = logsumexp_parts_sx(logp)
-    return [v / total for v in e]
-
-
-def logsumexp_parts_sx(logp: list):
-    """Stabilised pieces of log-sum-exp over a list of SX terms: (m, [exp(a - m)], sum).
-
-    log sum_k exp(a_k) = m + log(sum); m = max_k a_k keeps every exponential in (0, 1].
-    """
-    import casadi as ca
-
-    m = logp[0]
-    for a in logp[1:]:
-        m = ca.fmax(m, a)
-    e = [ca.exp(a - m) for a in logp]
-    total = e[0]
-    for v in e[1:]:
-        total = total + v
-    return m, e, total
+    priors, means, covariances = _check_gmm(priors, means, covariances)
+    X2 = _points(X, means.shape[1])
+    x = ca.SX.sym("x", means.shape[1])
+    f = ca.Function("h", [x], [ca.vertcat(*responsibilities_sx(x, priors, means, covariances))])
+    if len(X2) == 0:
+        return np.zeros((0, len(priors)))
+    return batch_evaluate(f, X2.T)[0]

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 
 import casadi as ca
 import numpy as np
+from sklearn.base import BaseEstimator, RegressorMixin
 
 from .demonstrations import Demonstrations
 from .errors import ConvergenceWarning, SolverError
@@ -193,7 +194,7 @@ def _initial_theta(
 
 
 # ------------------------------------------------------------------ the learner
-class SEDS:
+class SEDS(RegressorMixin, BaseEstimator):
     """Stable Estimator of Dynamical Systems, in CasADi + IPOPT.
 
     Parameters
@@ -257,50 +258,61 @@ class SEDS:
         approach_ratio: float = 4.0,
         verbose: bool = False,
     ) -> None:
-        if isinstance(n_components, bool) or not isinstance(n_components, (int, np.integer)):
-            raise TypeError(f"n_components must be an integer, got {n_components!r}")
-        if n_components < 1:
-            raise ValueError(f"n_components must be at least 1, got {n_components}")
-        if objective not in OBJECTIVES:
-            raise ValueError(f"unknown objective {objective!r}; valid: {', '.join(OBJECTIVES)}")
-        if hessian not in _HESSIANS:
-            raise ValueError(f"unknown hessian {hessian!r}; valid: {', '.join(_HESSIANS)}")
-        for name, v in (("omega_lower", omega_lower), ("omega_upper", omega_upper)):
-            if not (np.isfinite(v) and v > 0):
-                raise ValueError(f"{name} must be a positive finite weight, got {v}")
-        if not (np.isfinite(stability_margin) and stability_margin > 0):
-            raise ValueError(f"stability_margin must be positive, got {stability_margin}")
-        if int(max_iter) < 1:
-            raise ValueError(f"max_iter must be at least 1, got {max_iter}")
-        if not (np.isfinite(tol) and tol > 0):
-            raise ValueError(f"tol must be positive, got {tol}")
-        self.n_components = int(n_components)
+        # scikit-learn convention: store the parameters as given; fit() validates them
+        self.n_components = n_components
         self.objective = objective
         self.random_state = random_state
-        self.omega_lower = float(omega_lower)
-        self.omega_upper = float(omega_upper)
-        self.stability_margin = float(stability_margin)
-        self.max_iter = int(max_iter)
-        self.tol = float(tol)
-        if not (np.isfinite(tol_objective_change) and tol_objective_change >= 0):
-            raise ValueError(f"tol_objective_change must be >= 0, got {tol_objective_change}")
-        self.tol_objective_change = float(tol_objective_change) if tol_objective_change else 1e20
-        self.compile = bool(compile)
+        self.omega_lower = omega_lower
+        self.omega_upper = omega_upper
+        self.stability_margin = stability_margin
+        self.max_iter = max_iter
+        self.tol = tol
+        self.tol_objective_change = tol_objective_change
         self.hessian = hessian
-        self.require_convergence = bool(require_convergence)
-        self.verbose = bool(verbose)
-        if approach_direction is not None:
-            u = np.asarray(approach_direction, dtype=float).ravel()
+        self.require_convergence = require_convergence
+        self.compile = compile
+        self.approach_direction = approach_direction
+        self.approach_ratio = approach_ratio
+        self.verbose = verbose
+
+    def _validated(self) -> dict:
+        """The parameters checked and normalised (raises ValueError/TypeError with a remedy)."""
+        K = self.n_components
+        if isinstance(K, bool) or not isinstance(K, (int, np.integer)):
+            raise TypeError(f"n_components must be an integer, got {K!r}")
+        if K < 1:
+            raise ValueError(f"n_components must be at least 1, got {K}")
+        if self.objective not in OBJECTIVES:
+            raise ValueError(f"unknown objective {self.objective!r}; valid: {', '.join(OBJECTIVES)}")
+        if self.hessian not in _HESSIANS:
+            raise ValueError(f"unknown hessian {self.hessian!r}; valid: {', '.join(_HESSIANS)}")
+        for name in ("omega_lower", "omega_upper"):
+            v = getattr(self, name)
+            if not (np.isfinite(v) and v > 0):
+                raise ValueError(f"{name} must be a positive finite weight, got {v}")
+        if not (np.isfinite(self.stability_margin) and self.stability_margin > 0):
+            raise ValueError(f"stability_margin must be positive, got {self.stability_margin}")
+        if int(self.max_iter) < 1:
+            raise ValueError(f"max_iter must be at least 1, got {self.max_iter}")
+        if not (np.isfinite(self.tol) and self.tol > 0):
+            raise ValueError(f"tol must be positive, got {self.tol}")
+        toc = self.tol_objective_change
+        if not (np.isfinite(toc) and toc >= 0):
+            raise ValueError(f"tol_objective_change must be >= 0, got {toc}")
+        u = self.approach_direction
+        if u is not None:
+            u = np.asarray(u, dtype=float).ravel()
             if not (np.all(np.isfinite(u)) and np.linalg.norm(u) > 0):
                 raise ValueError("approach_direction must be a finite non-zero vector")
-            approach_direction = u / np.linalg.norm(u)
-        if not (np.isfinite(approach_ratio) and approach_ratio >= 1):
-            raise ValueError(f"approach_ratio must be >= 1, got {approach_ratio}")
-        self.approach_direction = approach_direction
-        self.approach_ratio = float(approach_ratio)
+            u = u / np.linalg.norm(u)
+        if not (np.isfinite(self.approach_ratio) and self.approach_ratio >= 1):
+            raise ValueError(f"approach_ratio must be >= 1, got {self.approach_ratio}")
+        return {"n_components": int(K), "max_iter": int(self.max_iter),
+                "tol_objective_change": float(toc) if toc else 1e20, "approach_direction": u}
 
     def build_problem(self, demos: Demonstrations) -> SEDSProblem:
         """Scale the data, initialise by k-means + EM and build the CasADi problem."""
+        self._validated()
         if not isinstance(demos, Demonstrations):
             raise TypeError(
                 f"fit expects a seds_casadi.Demonstrations, got {type(demos).__name__}; "
@@ -308,7 +320,7 @@ class SEDS:
             )
         X, Xd, phase, _ = demos.stacked()
         d = X.shape[1]
-        layout = Layout(self.n_components, d, with_noise=self.objective == "likelihood")
+        layout = Layout(int(self.n_components), d, with_noise=self.objective == "likelihood")
         # each sample gives d velocity equations; ask for at least one per parameter
         if X.shape[0] * d < layout.size or X.shape[0] < 2 * self.n_components:
             raise ValueError(
@@ -354,17 +366,26 @@ class SEDS:
             objective_function=kernels.casadi_function(),
         )
 
-    def fit(self, demos: Demonstrations) -> StableDS:
+    def fit(self, X, y=None, target=None) -> SEDS:
         """Learn a certified globally stable DS from demonstrations.
 
         Parameters
         ----------
-        demos : Demonstrations
+        X : Demonstrations or array, shape (n_samples, d)
+            The demonstrations; or positions of samples (one row each), with ``y``.
+        y : array, shape (n_samples, d), optional
+            Velocities at the rows of ``X`` (only with an array ``X``). Samples have no time
+            order, so the Eq. 11 weights are uniform; prefer :class:`Demonstrations` for the
+            direction objective. This form is what scikit-learn's model selection passes
+            (split by demonstration, e.g. ``GroupKFold``).
+        target : array, shape (d,), optional
+            The attractor for array input (default: the origin).
 
         Returns
         -------
-        StableDS
-            The fitted model; ``fit_info`` holds the solver status, iterations, objective and time.
+        self : SEDS
+            Fitted: ``model_`` is the certified :class:`StableDS` (``model_.fit_info`` holds the
+            solver status, iterations, objective and time; also ``fit_info_``).
 
         Raises
         ------
@@ -374,19 +395,52 @@ class SEDS:
             The solution failed the Eq. 10 certificate (never expected by construction; the check
             is there so that an uncertified model can never be returned).
         """
+        demos = _as_demonstrations(X, y, target)
+        params = self._validated()
+        self.model_ = self._solve(demos, params)
+        self.fit_info_ = self.model_.fit_info
+        self.n_features_in_ = demos.n_dims
+        return self
+
+    def predict(self, X) -> np.ndarray:
+        """f(x) of Eq. 5 of the fitted model at each point (see :meth:`StableDS.predict`)."""
+        return self._fitted().predict(X)
+
+    def score(self, X, y=None, sample_weight=None) -> float:
+        """R^2 of the predicted velocities (scikit-learn's regressor score).
+
+        ``X`` is a :class:`Demonstrations` (then ``y`` is taken from it) or positions with
+        velocities ``y``.
+        """
+        from sklearn.metrics import r2_score
+
+        if isinstance(X, Demonstrations):
+            Xs, Xd, _, _ = X.stacked()
+            X, y = Xs + X.target, Xd
+        return float(r2_score(y, self.predict(X), sample_weight=sample_weight))
+
+    def _fitted(self) -> StableDS:
+        model = getattr(self, "model_", None)
+        if model is None:
+            from sklearn.exceptions import NotFittedError
+
+            raise NotFittedError("this SEDS learner is not fitted yet: call fit(demos) first")
+        return model
+
+    def _solve(self, demos: Demonstrations, params: dict) -> StableDS:
         t0 = time.perf_counter()
         prob = self.build_problem(demos)
         opts = {
             "print_time": False,
             "ipopt.print_level": 5 if self.verbose else 0,
             "ipopt.sb": "yes",
-            "ipopt.max_iter": self.max_iter,
+            "ipopt.max_iter": params["max_iter"],
             "ipopt.tol": self.tol,
             # only simple bounds and an interior start: a small initial barrier parameter saves
             # about 40 % of the iterations on LASA at the same accuracy (measured, see README)
             "ipopt.mu_init": 1e-4,
             "ipopt.acceptable_tol": 1e-2,
-            "ipopt.acceptable_obj_change_tol": self.tol_objective_change,
+            "ipopt.acceptable_obj_change_tol": params["tol_objective_change"],
             "ipopt.acceptable_iter": 5,
             "ipopt.hessian_approximation": self.hessian,
         }
@@ -394,8 +448,8 @@ class SEDS:
         objective = prob.kernels.nlp_objective()  # keep alive while the solver runs
         nlp = {"x": theta_sym, "f": objective(theta_sym)}
         bounds = {}
-        if self.approach_direction is not None:
-            u = self.approach_direction
+        if params["approach_direction"] is not None:
+            u = params["approach_direction"]
             if u.shape != (prob.layout.d,):
                 raise ValueError(f"approach_direction has {u.shape[0]} entries for "
                                  f"{prob.layout.d}-D demonstrations")
@@ -420,7 +474,7 @@ class SEDS:
                 raise SolverError(msg, status)
             warnings.warn(f"{msg} (status {status}); the model is certified stable but may fit "
                           "poorly. Raise max_iter or check the data.", ConvergenceWarning,
-                          stacklevel=2)
+                          stacklevel=3)
         c = prob.speed_factor(theta) if self.objective == "direction" else 1.0
         priors, means, covs = prob.to_model_arrays(theta, speed_factor=c)
         info = {
@@ -434,10 +488,26 @@ class SEDS:
             "seconds_solve": time.perf_counter() - t_built,
             "n_parameters": prob.layout.size,
             "speed_factor": c,
-            "n_components": self.n_components,
+            "n_components": params["n_components"],
             "n_samples": int(prob.X.shape[0]),
             "hessian": self.hessian,
             "compiled_kernels": prob.kernels.compiled,
             "solver": "ipopt",
         }
         return StableDS(priors, means, covs, prob.target, fit_info=info, status=status)
+
+
+def _as_demonstrations(X, y, target) -> Demonstrations:
+    """Demonstrations from fit()'s input (a Demonstrations, or sample arrays X, y)."""
+    if isinstance(X, Demonstrations):
+        if y is not None or target is not None:
+            raise ValueError("y and target are taken from the Demonstrations; pass them only "
+                             "with array input")
+        return X
+    if y is None:
+        raise TypeError(
+            f"fit expects a seds_casadi.Demonstrations, or sample arrays X (positions) and y "
+            f"(velocities); got {type(X).__name__} without y. Wrap trajectories with "
+            "Demonstrations(positions, dt=...)"
+        )
+    return Demonstrations.from_samples(X, y, target=target)

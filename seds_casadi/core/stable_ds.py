@@ -24,9 +24,10 @@ import os
 import casadi as ca
 import numpy as np
 
+from ..codegen import batch_evaluate
 from ._io import atomic_npz
 from .errors import ModelFileError, StabilityError
-from .gmm import responsibilities, responsibilities_casadi
+from .gmm import responsibilities_sx
 
 __all__ = ["StableDS", "certify"]
 
@@ -183,7 +184,7 @@ class StableDS:
         return X2, single
 
     def predict(self, X) -> np.ndarray:
-        """Velocity f(x) of Eq. 5 at each point.
+        """Velocity f(x) of Eq. 5 at each point (the expression of :meth:`to_casadi`).
 
         Parameters
         ----------
@@ -194,11 +195,21 @@ class StableDS:
         array, same shape as X
         """
         X2, single = self._check_points(X)
-        d = self.n_dims
-        h = responsibilities(X2, self.priors, self.means[:, :d], self.covariances[:, :d, :d])
-        lin = np.einsum("kij,nkj->nki", self.A, X2[:, None, :] - self.means[None, :, :d])
-        F = np.einsum("nk,nki->ni", h, lin + self.means[None, :, d:])
+        if len(X2) == 0:
+            return X2.copy()
+        F = batch_evaluate(self._function(), X2.T)[0]
         return F[0] if single else F
+
+    def _function(self) -> ca.Function:
+        f = self.__dict__.get("_f")
+        if f is None:
+            f = self.__dict__["_f"] = self.to_casadi()
+        return f
+
+    def __getstate__(self) -> dict:  # the cached CasADi Function is rebuilt after unpickling
+        state = dict(self.__dict__)
+        state.pop("_f", None)
+        return state
 
     def rollout(self, x0, dt: float, max_steps: int = 20000, tol: float | None = None,
                 method: str = "rk4") -> np.ndarray | list[np.ndarray]:
@@ -255,10 +266,14 @@ class StableDS:
         return outs[0] if single else outs
 
     def to_casadi(self, name: str = "seds_f") -> ca.Function:
-        """A CasADi Function x (d,) -> f(x) (d,), for code generation or use in optimal control."""
+        """Eq. 5 as a CasADi Function x (d,) -> f(x) (d,), for code generation or optimal control.
+
+        f(x) = sum_k h^k(x) (mu_xdot^k + A_k (x - mu_x^k)), h^k of Eq. 6. This is the one
+        definition of Eq. 5 in the package: :meth:`predict` evaluates it.
+        """
         d, K = self.n_dims, self.n_components
         x = ca.SX.sym("x", d)
-        h = responsibilities_casadi(x, self.priors, self.means[:, :d], self.covariances[:, :d, :d])
+        h = responsibilities_sx(x, self.priors, self.means[:, :d], self.covariances[:, :d, :d])
         f = ca.SX.zeros(d, 1)
         for k in range(K):
             lin = ca.DM(self.means[k, d:]) + ca.DM(self.A[k]) @ (x - ca.DM(self.means[k, :d]))

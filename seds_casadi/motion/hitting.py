@@ -62,7 +62,7 @@ import numpy as np
 from ..core._io import atomic_npz
 from ..core.demonstrations import Demonstrations
 from ..core.errors import ConvergenceWarning, SEDSError, SolverError
-from ..core.gmm import gmr_predict, responsibilities_casadi
+from ..core.gmm import gmr_predict, responsibilities_sx
 from ..core.seds import SEDS
 from ..core.stable_ds import StableDS
 
@@ -439,7 +439,7 @@ class HittingMotion:
         for i in range(int(restarts)):
             seed = seed0 + i
             try:
-                ds = SEDS(n_components, random_state=seed, **seds_kwargs).fit(data)
+                ds = SEDS(n_components, random_state=seed, **seds_kwargs).fit(data).model_
                 motion = cls(TargetField(ds, approach=approach), strength)
             except (ValueError, SEDSError) as exc:  # spiralling limit, certificate, solver
                 tries.append({"seed": seed, "error": str(exc)})
@@ -729,7 +729,7 @@ class HittingMotion:
         R = ca.vertcat(ca.horzcat(c, -s, 0), ca.horzcat(s, c, 0), ca.horzcat(0, 0, 1))
         y = R.T @ x
         ds = self.target_field.ds
-        hw = responsibilities_casadi(y, ds.priors, ds.means[:, :3], ds.covariances[:, :3, :3])
+        hw = responsibilities_sx(y, ds.priors, ds.means[:, :3], ds.covariances[:, :3, :3])
         f = ca.SX.zeros(3, 1)
         for k in range(ds.n_components):
             f = f + hw[k] * (ca.DM(ds.A[k]) @ (y - ca.DM(ds.target)))
@@ -738,7 +738,7 @@ class HittingMotion:
         h = ca.if_else(nf > _TINY, f / ca.fmax(nf, _TINY), psi)
         sf = self.strength
         d = 3
-        hs = responsibilities_casadi(y, sf.priors, sf.means[:, :d], sf.covariances[:, :d, :d])
+        hs = responsibilities_sx(y, sf.priors, sf.means[:, :d], sf.covariances[:, :d, :d])
         logv = 0
         for k in range(len(sf.priors)):
             gain = np.linalg.solve(sf.covariances[k, :d, :d], sf.covariances[k, :d, d])

@@ -1,0 +1,72 @@
+"""Independent numpy implementations of the package's equations, used only as test oracles.
+
+The package defines each equation once, in CasADi; these re-implementations check it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+_LOG_2PI = float(np.log(2.0 * np.pi))
+
+
+def log_gaussian(X: np.ndarray, mean: np.ndarray, cov: np.ndarray) -> np.ndarray:
+    """Log density of N(mean, cov) at the rows of X (Cholesky)."""
+    L = np.linalg.cholesky(cov)
+    diff = (X - mean).T
+    z = np.linalg.solve(L, diff) if diff.size else diff
+    maha = np.sum(z * z, axis=0)
+    logdet = 2.0 * np.sum(np.log(np.diag(L)))
+    return -0.5 * (maha + logdet + mean.shape[0] * _LOG_2PI)
+
+
+def responsibilities(X, priors, means, covariances) -> np.ndarray:
+    """Eq. 6 by log-sum-exp, shape (n, K)."""
+    logp = np.stack([np.log(priors[k]) + log_gaussian(X, means[k], covariances[k])
+                     for k in range(len(priors))], axis=1)
+    logp -= logp.max(axis=1, keepdims=True)
+    w = np.exp(logp)
+    return w / w.sum(axis=1, keepdims=True)
+
+
+def gmr_predict(X, priors, means, covariances, in_idx, out_idx, return_cov=False):
+    """GMR mean (and covariance by the law of total variance)."""
+    in_idx, out_idx = np.asarray(in_idx), np.asarray(out_idx)
+    mu_in = means[:, in_idx]
+    cov_in = covariances[:, in_idx][:, :, in_idx]
+    h = responsibilities(X, priors, mu_in, cov_in)
+    n, K = h.shape
+    means_k = np.empty((K, n, len(out_idx)))
+    conds = []
+    for k in range(K):
+        s_oi = covariances[k][np.ix_(out_idx, in_idx)]
+        gain = np.linalg.solve(cov_in[k], s_oi.T).T
+        means_k[k] = means[k, out_idx] + (X - mu_in[k]) @ gain.T
+        conds.append(covariances[k][np.ix_(out_idx, out_idx)] - gain @ s_oi.T)
+    mean = np.einsum("nk,kno->no", h, means_k)
+    if not return_cov:
+        return mean
+    cov = np.einsum("nk,kop->nop", h, np.stack(conds))
+    dev = means_k - mean[None]
+    cov += np.einsum("nk,kno,knp->nop", h, dev, dev)
+    return mean, cov
+
+
+def seds_velocity(X, priors, means, covariances) -> np.ndarray:
+    """Eq. 5 of a joint GMM over (x, xdot): f(x) = sum_k h^k(x) (mu_xdot^k + A_k (x - mu_x^k))."""
+    d = means.shape[1] // 2
+    A = np.stack([np.linalg.solve(c[:d, :d].T, c[d:, :d].T).T for c in covariances])
+    h = responsibilities(X, priors, means[:, :d], covariances[:, :d, :d])
+    lin = np.einsum("kij,nkj->nki", A, X[:, None, :] - means[None, :, :d])
+    return np.einsum("nk,nki->ni", h, lin + means[None, :, d:])
+
+
+def random_gmm(rng: np.random.Generator, K: int, n: int, spread: float = 1.0):
+    """A random GMM with well-conditioned covariances."""
+    priors = rng.dirichlet(np.ones(K))
+    means = rng.standard_normal((K, n)) * spread
+    covs = []
+    for _ in range(K):
+        M = rng.standard_normal((n, n))
+        covs.append(M @ M.T / n + 0.2 * np.eye(n))
+    return priors, means, np.stack(covs)
