@@ -21,11 +21,13 @@ over d dimensions has K + dK + d(d+1)K/2 parameters.
 from __future__ import annotations
 
 import numpy as np
+from sklearn.base import BaseEstimator, RegressorMixin
+from sklearn.utils.validation import check_is_fitted
 
-from ..core.gmm import gmr_predict
+from ..core.gmm import gmr_function, gmr_predict
 
 __all__ = ["GPRModel", "GMRModel", "make_model", "MODELS", "gpr_param_count",
-           "gmm_param_count"]
+           "gmm_param_count", "sklearn_random_state"]
 
 
 def gpr_param_count(n_train: int, n_inputs: int, n_outputs: int) -> int:
@@ -52,58 +54,82 @@ def _check_xy(S, Y, min_samples: int, what: str):
     return S, Y
 
 
-class GPRModel:
+def sklearn_random_state(random_state):
+    """An int, None or numpy Generator as a seed scikit-learn accepts (a Generator gives an int)."""
+    if isinstance(random_state, np.random.Generator):
+        return int(random_state.integers(2**31 - 1))
+    return random_state
+
+
+class GPRModel(RegressorMixin, BaseEstimator):
     """GPR per output (Eq. 17), squared-exponential kernel with per-dimension length scales.
+
+    A scikit-learn estimator: ``clone``, ``get_params``/``set_params``, ``GridSearchCV`` and
+    ``cross_val_score`` work; ``score`` is R^2 over the outputs.
 
     Parameters
     ----------
-    n_restarts : int
+    n_restarts : int, default 2
         Restarts of the marginal-likelihood optimiser.
-    random_state : int or None
+    random_state : int, numpy Generator or None, default 0
+
+    Attributes
+    ----------
+    gps_ : list of sklearn GaussianProcessRegressor
+        One per output.
+    active_ : array of int
+        Inputs that vary in the training set (the others are left out of the kernel).
+    n_params_ : int
+        Parameter count as in the paper's Table 1.
     """
 
     name = "gpr"
 
     def __init__(self, n_restarts: int = 2, random_state=0) -> None:
-        self.n_restarts = int(n_restarts)
+        self.n_restarts = n_restarts
         self.random_state = random_state
 
     def fit(self, S, Y) -> GPRModel:
         """Fit on situations S (M, d_in) and outputs Y (M, n_out); returns self."""
+        import warnings
+
         from sklearn.gaussian_process import GaussianProcessRegressor
         from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
 
+        if int(self.n_restarts) < 0:
+            raise ValueError(f"n_restarts must be >= 0, got {self.n_restarts}")
         S, Y = _check_xy(S, Y, 2, "GPR")
         d = S.shape[1]
         # inputs that do not vary in the training set carry no information (e.g. the distance
         # to the hole when only its sideways position changes): leave them out of the kernel
         spread = np.ptp(S, axis=0)
-        self.active_ = np.flatnonzero(spread > 1e-9 * max(1.0, float(spread.max())))
-        if self.active_.size == 0:
+        active = np.flatnonzero(spread > 1e-9 * max(1.0, float(spread.max())))
+        if active.size == 0:
             raise ValueError("GPR: all training situations are the same point")
-        scale = spread[self.active_]
-        self.gps_ = []
+        scale = spread[active]
+        seed = sklearn_random_state(self.random_state)
+        gps = []
         for j in range(Y.shape[1]):
             kernel = (ConstantKernel(1.0, (1e-2, 1e2))
                       * RBF(length_scale=scale, length_scale_bounds=(0.05 * scale.min(),
                                                                      100 * scale.max()))
                       + WhiteKernel(1e-4, (1e-8, 1e-1)))
             gp = GaussianProcessRegressor(kernel=kernel, normalize_y=True,
-                                          n_restarts_optimizer=self.n_restarts,
-                                          random_state=self.random_state)
-            import warnings
-
+                                          n_restarts_optimizer=int(self.n_restarts),
+                                          random_state=seed)
             with warnings.catch_warnings():  # bound warnings on tiny training sets
                 warnings.simplefilter("ignore")
-                gp.fit(S[:, self.active_], Y[:, j])
-            self.gps_.append(gp)
+                gp.fit(S[:, active], Y[:, j])
+            gps.append(gp)
+        self.active_, self.gps_ = active, gps
         self.n_params_ = gpr_param_count(S.shape[0], d, Y.shape[1])
-        self.n_inputs_ = d
+        self.n_inputs_ = self.n_features_in_ = d
         return self
 
     def predict(self, S, return_var: bool = False):
         """Mean (n, n_out) and, with ``return_var``, the predictive variance (n, n_out)."""
-        S = np.atleast_2d(np.asarray(S, dtype=float))[:, self.active_]
+        check_is_fitted(self, "gps_")
+        S = _check_s(S, self.n_inputs_)[:, self.active_]
         out = [gp.predict(S, return_std=True) for gp in self.gps_]
         mean = np.column_stack([m for m, _ in out])
         if not return_var:
@@ -111,57 +137,98 @@ class GPRModel:
         return mean, np.column_stack([s**2 for _, s in out])
 
 
-class GMRModel:
+class GMRModel(RegressorMixin, BaseEstimator):
     """GMR on a joint GMM over (s, outputs) (Eq. 18), or one GMM per output (``separate``).
+
+    A scikit-learn estimator: ``GridSearchCV(GMRModel(), {"n_components": [1, 2, 3]})`` picks K.
 
     Parameters
     ----------
-    n_components : int
-    separate : bool
+    n_components : int, default 3
+    separate : bool, default False
         One GMM per output (the paper's "sep. GMR") instead of one joint GMM.
-    random_state : int or None
+    random_state : int, numpy Generator or None, default 0
+
+    Attributes
+    ----------
+    gmms_ : list of (output columns, sklearn GaussianMixture)
+    n_params_ : int
+        Parameter count as in the paper's Table 1.
     """
 
     def __init__(self, n_components: int = 3, separate: bool = False, random_state=0) -> None:
-        if int(n_components) < 1:
-            raise ValueError(f"n_components must be at least 1, got {n_components}")
-        self.n_components = int(n_components)
-        self.separate = bool(separate)
+        self.n_components = n_components
+        self.separate = separate
         self.random_state = random_state
-        self.name = "sep_gmr" if separate else "gmr"
+
+    @property
+    def name(self) -> str:
+        """Registry name: ``"sep_gmr"`` or ``"gmr"``."""
+        return "sep_gmr" if self.separate else "gmr"
 
     def fit(self, S, Y) -> GMRModel:
         """Fit by k-means then EM on situations S (M, d_in) and outputs Y (M, n_out)."""
         from sklearn.mixture import GaussianMixture
 
         K = self.n_components
+        if isinstance(K, bool) or not isinstance(K, (int, np.integer)) or K < 1:
+            raise ValueError(f"n_components must be an integer >= 1, got {K!r}")
         S, Y = _check_xy(S, Y, K + 1, f"GMR with {K} components")
+        d = S.shape[1]
         groups = [[j] for j in range(Y.shape[1])] if self.separate else [list(range(Y.shape[1]))]
-        self.gmms_ = []
+        seed = sklearn_random_state(self.random_state)
+        gmms, functions = [], []
         for cols in groups:
             data = np.column_stack([S, Y[:, cols]])
-            gm = GaussianMixture(K, covariance_type="full", init_params="kmeans",
+            gm = GaussianMixture(int(K), covariance_type="full", init_params="kmeans",
                                  reg_covar=1e-6 * max(1.0, float(np.var(data))),
-                                 random_state=self.random_state).fit(data)
-            self.gmms_.append((cols, gm))
-        self.n_inputs_ = S.shape[1]
+                                 random_state=seed).fit(data)
+            gmms.append((cols, gm))
+            # GMR (Eq. 18) of this GMM, built once: core.gmm defines it in CasADi
+            functions.append(gmr_function(gm.weights_, gm.means_, gm.covariances_,
+                                          list(range(d)), list(range(d, d + len(cols))),
+                                          with_cov=True))
+        self.gmms_, self._functions = gmms, functions
+        self.n_inputs_ = self.n_features_in_ = d
         self.n_outputs_ = Y.shape[1]
-        self.n_params_ = sum(gmm_param_count(K, S.shape[1] + len(c)) for c, _ in self.gmms_)
+        self.n_params_ = sum(gmm_param_count(int(K), d + len(c)) for c, _ in gmms)
         return self
 
     def predict(self, S, return_var: bool = False):
         """Mean (n, n_out) and, with ``return_var``, the conditional variance (n, n_out)."""
-        S = np.atleast_2d(np.asarray(S, dtype=float))
+        check_is_fitted(self, "gmms_")
+        S = _check_s(S, self.n_inputs_)
         d = self.n_inputs_
         mean = np.empty((len(S), self.n_outputs_))
         var = np.empty_like(mean)
-        for cols, gm in self.gmms_:
-            out_idx = np.arange(d, d + len(cols))
+        for (cols, gm), f in zip(self.gmms_, self._functions):
             m, c = gmr_predict(S, gm.weights_, gm.means_, gm.covariances_, np.arange(d),
-                               out_idx, return_cov=True)
+                               np.arange(d, d + len(cols)), return_cov=True, function=f)
             mean[:, cols] = m
             var[:, cols] = np.diagonal(c, axis1=1, axis2=2)
         return (mean, var) if return_var else mean
+
+    def __getstate__(self) -> dict:  # the GMR Functions are rebuilt from gmms_ after unpickling
+        state = dict(self.__dict__)
+        state.pop("_functions", None)
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        if "gmms_" in state:
+            d = state["n_inputs_"]
+            self._functions = [gmr_function(gm.weights_, gm.means_, gm.covariances_,
+                                            list(range(d)), list(range(d, d + len(c))), True)
+                               for c, gm in state["gmms_"]]
+
+
+def _check_s(S, n_inputs: int) -> np.ndarray:
+    S = np.atleast_2d(np.asarray(S, dtype=float))
+    if S.ndim != 2 or S.shape[1] != n_inputs:
+        raise ValueError(f"situations must have shape (n, {n_inputs}), got {S.shape}")
+    if not np.all(np.isfinite(S)):
+        raise ValueError("situations contain NaN or infinite values")
+    return S
 
 
 MODELS = {
