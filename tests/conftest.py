@@ -47,3 +47,30 @@ def curved_demos_3d() -> Demonstrations:
         s = 3 * t**2 - 2 * t**3  # smooth start and stop
         pos.append(start * (1 - s) + bend * np.sin(np.pi * s) + np.array([0.1, 0.0, 0.05]) * s)
     return Demonstrations(pos, dt=0.025)
+
+
+# ------------------------------------------------------------------ speed classes
+# `pytest -m "not slow"` runs the fast suite (SEDS core, GMM/GMR, motion, ball, learners: under
+# two minutes on 2 cores); CI runs everything. Whole modules that drive robots, exudyn, the
+# command line or the examples are slow, and so are the single tests listed here (each takes
+# several seconds: end-to-end runs, Dask clusters, 50-swing acceptance figures).
+SLOW_MODULES = {"test_examples.py", "test_play.py", "test_validation.py",
+                "test_robots_control.py", "test_cli_and_lasa.py"}
+SLOW_TESTS = {
+    "test_fifty_random_swings_hit_within_one_degree_and_two_percent",
+    "test_a_badly_lined_up_fit_is_refitted_and_reported",
+    "test_table1_command_line_quick",
+    "test_table1_on_a_dask_local_cluster_gives_the_same_numbers",
+    "test_table1_runs_end_to_end_and_is_identical_on_local_processes",
+    "test_unreachable_dask_scheduler_is_a_clear_error",
+    "test_the_teacher_keeps_to_direct_shots_unless_banks_are_allowed",
+    "test_simd_backend_equals_the_casadi_kernel",
+    "test_grid_search_picks_seds_components_by_demonstration_folds",
+}
+
+
+def pytest_collection_modifyitems(config, items):
+    for item in items:
+        name = item.name.split("[")[0]
+        if item.path.name in SLOW_MODULES or name in SLOW_TESTS:
+            item.add_marker(pytest.mark.slow)

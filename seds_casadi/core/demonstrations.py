@@ -1,4 +1,4 @@
-"""Demonstrations: validation, preprocessing as SEDS does it, and file formats.
+"""Demonstrations: validation and preprocessing as SEDS does it.
 
 Preprocessing (as in the original SEDS package, ``preprocess_demos``):
 
@@ -9,26 +9,19 @@ Preprocessing (as in the original SEDS package, ``preprocess_demos``):
    the origin. When the target is not given, each demonstration is shifted by its own end point
    (SEDS's choice), so every demonstration ends exactly at the attractor.
 
-File formats
-------------
-``.npz`` (read with ``allow_pickle=False``): arrays ``pos_0``, ``pos_1``, ... of shape (T_n, d);
-optional ``vel_n`` of the same shapes, ``t_n`` of shape (T_n,), a scalar ``dt`` and ``target`` of
-shape (d,).
-
-``.csv``: a header row, then one row per sample. Columns ``demo`` (an integer id; rows of one
-demonstration are contiguous and in time order), ``t`` (time stamp, seconds), ``x0 .. x{d-1}``
-(positions) and optionally ``v0 .. v{d-1}`` (velocities). Lines starting with ``#`` are comments.
+File formats (``.npz``, ``.csv``): :mod:`seds_casadi.core.demo_files`.
 """
 
 from __future__ import annotations
 
-import os
 from collections.abc import Sequence
 
 import numpy as np
 from scipy.ndimage import uniform_filter1d
 
 __all__ = ["Demonstrations", "load_demonstrations", "save_demonstrations"]
+
+# the file readers live in demo_files (one concept per module); re-exported here at the end
 
 
 def _as_demo_list(arrays, what: str) -> list[np.ndarray]:
@@ -64,6 +57,96 @@ def _as_demo_list(arrays, what: str) -> list[np.ndarray]:
             )
         out.append(a)
     return out
+
+
+def _check_positions(pos: list[np.ndarray]) -> list[np.ndarray]:
+    d = pos[0].shape[1]
+    for n, p in enumerate(pos):
+        if p.shape[1] != d:
+            raise ValueError(
+                f"positions[{n}] has {p.shape[1]} dimensions but positions[0] has {d}; "
+                "all demonstrations must have the same dimension"
+            )
+        if p.shape[0] < 2:
+            raise ValueError(
+                f"positions[{n}] has {p.shape[0]} sample(s); a demonstration needs at least 2"
+            )
+    return pos
+
+
+def _check_velocities(vel: list[np.ndarray], pos: list[np.ndarray]) -> list[np.ndarray]:
+    if len(vel) != len(pos):
+        raise ValueError(
+            f"{len(vel)} velocity arrays for {len(pos)} demonstrations; give one per demo"
+        )
+    for n, (p, v) in enumerate(zip(pos, vel)):
+        if v.shape != p.shape:
+            raise ValueError(f"velocities[{n}] has shape {v.shape} but positions[{n}] has {p.shape}")
+    return vel
+
+
+def _finite_differences(pos: list[np.ndarray], dt: float | None, times) -> list[np.ndarray]:
+    """Velocities by second-order finite differences from time stamps or a time step."""
+    if times is not None:
+        tl = _as_demo_list(times, "times")
+        vel = []
+        for n, (p, t) in enumerate(zip(pos, tl)):
+            t = t.ravel()
+            if t.shape[0] != p.shape[0]:
+                raise ValueError(f"times[{n}] has {t.shape[0]} stamps for {p.shape[0]} positions")
+            if np.any(np.diff(t) <= 0):
+                raise ValueError(f"times[{n}] must be strictly increasing")
+            vel.append(np.gradient(p, t, axis=0))
+        if len(tl) != len(pos):
+            raise ValueError(f"{len(tl)} time arrays for {len(pos)} demonstrations")
+        return vel
+    if dt is not None:
+        return [np.gradient(p, dt, axis=0) for p in pos]
+    raise ValueError(
+        "velocities are not given: pass velocities=, dt= (time step) or times= "
+        "(time stamps) so they can be derived by finite differences"
+    )
+
+
+def _trim_standstill(pos, vel, trim_speed) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """Drop leading and trailing samples slower than the threshold (SEDS's ``tol_cutting``)."""
+    speeds = [np.linalg.norm(v, axis=1) for v in vel]
+    vmax = max(float(s.max()) for s in speeds)
+    if not vmax > 0.0:
+        raise ValueError(
+            "the demonstrations never move (all velocities are zero); there is no motion to learn"
+        )
+    thr = 1e-3 * vmax if trim_speed is None else float(trim_speed)
+    if not np.isfinite(thr) or thr < 0:
+        raise ValueError(f"trim_speed must be a finite number >= 0, got {trim_speed}")
+    tp, tv = [], []
+    for n, (p, v, s) in enumerate(zip(pos, vel, speeds)):
+        moving = np.flatnonzero(s > thr)
+        if moving.size == 0:
+            raise ValueError(
+                f"demonstration {n} never moves faster than {thr:.3g} (trim_speed); "
+                "remove it or lower trim_speed"
+            )
+        lo, hi = moving[0], min(moving[-1] + 1, len(p) - 1)
+        if hi - lo + 1 < 2:
+            raise ValueError(
+                f"demonstration {n} keeps fewer than 2 samples after trimming standstill"
+            )
+        tp.append(p[lo : hi + 1].copy())
+        tv.append(v[lo : hi + 1].copy())
+    return tp, tv
+
+
+def _target_and_shifts(tp: list[np.ndarray], target, shift_each: bool):
+    """The attractor (given, or the mean end point) and the shift of each demonstration."""
+    d = tp[0].shape[1]
+    if target is not None:
+        tgt = np.asarray(target, dtype=float).ravel()
+        if tgt.shape != (d,) or not np.all(np.isfinite(tgt)):
+            raise ValueError(f"target must be a finite array of shape ({d},), got {target!r}")
+        return tgt, [tgt for _ in tp]
+    tgt = np.mean([p[-1] for p in tp], axis=0)
+    return tgt, [p[-1] if shift_each else tgt for p in tp]
 
 
 class Demonstrations:
@@ -113,90 +196,18 @@ class Demonstrations:
         trim_speed: float | None = None,
         shift_each: bool = True,
     ) -> None:
-        pos = _as_demo_list(positions, "positions")
-        d = pos[0].shape[1]
-        for n, p in enumerate(pos):
-            if p.shape[1] != d:
-                raise ValueError(
-                    f"positions[{n}] has {p.shape[1]} dimensions but positions[0] has {d}; "
-                    "all demonstrations must have the same dimension"
-                )
-            if p.shape[0] < 2:
-                raise ValueError(
-                    f"positions[{n}] has {p.shape[0]} sample(s); a demonstration needs at least 2"
-                )
+        pos = _check_positions(_as_demo_list(positions, "positions"))
         self.dt: float | None = None
+        if dt is not None and (velocities is not None or times is None):
+            self.dt = self._check_dt(dt)
         if velocities is not None:
-            vel = _as_demo_list(velocities, "velocities")
-            if len(vel) != len(pos):
-                raise ValueError(
-                    f"{len(vel)} velocity arrays for {len(pos)} demonstrations; give one per demo"
-                )
-            for n, (p, v) in enumerate(zip(pos, vel)):
-                if v.shape != p.shape:
-                    raise ValueError(
-                        f"velocities[{n}] has shape {v.shape} but positions[{n}] has {p.shape}"
-                    )
-            if dt is not None:
-                self.dt = self._check_dt(dt)
+            vel = _check_velocities(_as_demo_list(velocities, "velocities"), pos)
         else:
             if smoothing and int(smoothing) > 1:
                 pos = [uniform_filter1d(p, size=int(smoothing), axis=0, mode="nearest") for p in pos]
-            if times is not None:
-                tl = _as_demo_list(times, "times")
-                vel = []
-                for n, (p, t) in enumerate(zip(pos, tl)):
-                    t = t.ravel()
-                    if t.shape[0] != p.shape[0]:
-                        raise ValueError(
-                            f"times[{n}] has {t.shape[0]} stamps for {p.shape[0]} positions"
-                        )
-                    if np.any(np.diff(t) <= 0):
-                        raise ValueError(f"times[{n}] must be strictly increasing")
-                    vel.append(np.gradient(p, t, axis=0))
-                if len(tl) != len(pos):
-                    raise ValueError(f"{len(tl)} time arrays for {len(pos)} demonstrations")
-            elif dt is not None:
-                self.dt = self._check_dt(dt)
-                vel = [np.gradient(p, self.dt, axis=0) for p in pos]
-            else:
-                raise ValueError(
-                    "velocities are not given: pass velocities=, dt= (time step) or times= "
-                    "(time stamps) so they can be derived by finite differences"
-                )
-        speeds = [np.linalg.norm(v, axis=1) for v in vel]
-        vmax = max(float(s.max()) for s in speeds)
-        if not vmax > 0.0:
-            raise ValueError(
-                "the demonstrations never move (all velocities are zero); "
-                "there is no motion to learn"
-            )
-        thr = 1e-3 * vmax if trim_speed is None else float(trim_speed)
-        if not np.isfinite(thr) or thr < 0:
-            raise ValueError(f"trim_speed must be a finite number >= 0, got {trim_speed}")
-        tp, tv = [], []
-        for n, (p, v, s) in enumerate(zip(pos, vel, speeds)):
-            moving = np.flatnonzero(s > thr)
-            if moving.size == 0:
-                raise ValueError(
-                    f"demonstration {n} never moves faster than {thr:.3g} (trim_speed); "
-                    "remove it or lower trim_speed"
-                )
-            lo, hi = moving[0], min(moving[-1] + 1, len(p) - 1)
-            if hi - lo + 1 < 2:
-                raise ValueError(
-                    f"demonstration {n} keeps fewer than 2 samples after trimming standstill"
-                )
-            tp.append(p[lo : hi + 1].copy())
-            tv.append(v[lo : hi + 1].copy())
-        if target is not None:
-            tgt = np.asarray(target, dtype=float).ravel()
-            if tgt.shape != (d,) or not np.all(np.isfinite(tgt)):
-                raise ValueError(f"target must be a finite array of shape ({d},), got {target!r}")
-            shifts = [tgt for _ in tp]
-        else:
-            tgt = np.mean([p[-1] for p in tp], axis=0)
-            shifts = [p[-1] if shift_each else tgt for p in tp]
+            vel = _finite_differences(pos, self.dt, times)
+        tp, tv = _trim_standstill(pos, vel, trim_speed)
+        tgt, shifts = _target_and_shifts(tp, target, shift_each)
         self._set(tp, tv, tgt, shifts)
 
     @staticmethod
@@ -346,94 +357,4 @@ class Demonstrations:
         return f"Demonstrations(n_demos={self.n_demos}, n_dims={self.n_dims}, samples={lens})"
 
 
-# ---------------------------------------------------------------------- files
-def load_demonstrations(path: str | os.PathLike, **kwargs) -> Demonstrations:
-    """Read demonstrations from a ``.npz`` or ``.csv`` file (formats in the module docstring).
-
-    Parameters
-    ----------
-    path : str or path-like
-    **kwargs
-        Passed to :class:`Demonstrations` (``smoothing``, ``trim_speed``, ``target``, ...).
-    """
-    path = os.fspath(path)
-    if not os.path.exists(path):
-        raise FileNotFoundError(f"no demonstrations file at {path!r}")
-    ext = os.path.splitext(path)[1].lower()
-    if ext == ".npz":
-        try:
-            with np.load(path, allow_pickle=False) as f:
-                data = {k: f[k] for k in f.files}
-        except Exception as exc:  # noqa: BLE001 - any reader failure is a bad file
-            raise ValueError(f"{path}: not a readable .npz file ({exc})") from None
-        n = 0
-        pos, vel, tim = [], [], []
-        while f"pos_{n}" in data:
-            pos.append(data[f"pos_{n}"])
-            if f"vel_{n}" in data:
-                vel.append(data[f"vel_{n}"])
-            if f"t_{n}" in data:
-                tim.append(data[f"t_{n}"])
-            n += 1
-        if n == 0:
-            raise ValueError(f"{path}: no arrays named pos_0, pos_1, ... (see the documented format)")
-        kw = dict(kwargs)
-        if vel:
-            if len(vel) != n:
-                raise ValueError(f"{path}: vel_n given for some demonstrations only")
-            kw.setdefault("velocities", vel)
-        elif tim:
-            if len(tim) != n:
-                raise ValueError(f"{path}: t_n given for some demonstrations only")
-            kw.setdefault("times", tim)
-        if "dt" in data:
-            kw.setdefault("dt", float(data["dt"]))
-        if "target" in data:
-            kw.setdefault("target", data["target"])
-        return Demonstrations(pos, **kw)
-    if ext == ".csv":
-        with open(path, encoding="utf-8") as fh:
-            lines = [ln for ln in fh if ln.strip() and not ln.lstrip().startswith("#")]
-        if not lines:
-            raise ValueError(f"{path}: empty CSV file")
-        header = [h.strip() for h in lines[0].split(",")]
-        for col in ("demo", "t", "x0"):
-            if col not in header:
-                raise ValueError(
-                    f"{path}: missing column {col!r}; expected columns demo, t, x0..x{{d-1}} "
-                    "and optionally v0..v{d-1}"
-                )
-        try:
-            table = np.array([[float(c) for c in ln.split(",")] for ln in lines[1:]], ndmin=2)
-        except ValueError as exc:
-            raise ValueError(f"{path}: a row is not numeric ({exc})") from None
-        if table.size == 0:
-            raise ValueError(f"{path}: no data rows; the set of demonstrations is empty")
-        if table.shape[1] != len(header):
-            raise ValueError(f"{path}: rows have {table.shape[1]} values for {len(header)} columns")
-        xcols = [header.index(f"x{j}") for j in range(len(header)) if f"x{j}" in header]
-        vcols = [header.index(f"v{j}") for j in range(len(header)) if f"v{j}" in header]
-        if vcols and len(vcols) != len(xcols):
-            raise ValueError(f"{path}: {len(vcols)} velocity columns for {len(xcols)} positions")
-        demo_ids = table[:, header.index("demo")]
-        starts = np.flatnonzero(np.r_[True, np.diff(demo_ids) != 0])
-        ends = np.r_[starts[1:], len(table)]
-        pos = [table[s:e][:, xcols] for s, e in zip(starts, ends)]
-        tim = [table[s:e, header.index("t")] for s, e in zip(starts, ends)]
-        kw = dict(kwargs)
-        if vcols:
-            kw.setdefault("velocities", [table[s:e][:, vcols] for s, e in zip(starts, ends)])
-        else:
-            kw.setdefault("times", tim)
-        return Demonstrations(pos, **kw)
-    raise ValueError(f"{path}: unknown demonstrations format {ext!r}; use .npz or .csv")
-
-
-def save_demonstrations(path: str | os.PathLike, demos: Demonstrations) -> None:
-    """Write demonstrations (positions and velocities, caller's coordinates) as ``.npz``."""
-    arrays = {}
-    for n, (p, v) in enumerate(zip(demos.positions, demos.velocities)):
-        arrays[f"pos_{n}"] = p
-        arrays[f"vel_{n}"] = v
-    arrays["target"] = demos.target
-    np.savez(path, **arrays)
+from .demo_files import load_demonstrations, save_demonstrations  # noqa: E402
