@@ -15,16 +15,20 @@ Usage: python benchmarks/bench_seds_fit.py [--shapes Angle CShape ...] [--baseli
 from __future__ import annotations
 
 import argparse
+import os
+import sys
 import time
 import warnings
 
 import numpy as np
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests"))
+from oracles import seds_objective as objective_numpy  # noqa: E402  (a plain numpy objective)
 from scipy.optimize import minimize
 
 from seds_casadi import SEDS, ConvergenceWarning
 from seds_casadi.core.datasets import LASA_SINGLE_SHAPES, load_lasa
 from seds_casadi.core.metrics import direction_error
-from seds_casadi.core.parametrization import objective_numpy
 
 
 def fit_times(shapes, K, n_samples):

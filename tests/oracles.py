@@ -70,3 +70,112 @@ def random_gmm(rng: np.random.Generator, K: int, n: int, spread: float = 1.0):
         M = rng.standard_normal((n, n))
         covs.append(M @ M.T / n + 0.2 * np.eye(n))
     return priors, means, np.stack(covs)
+
+
+# ------------------------------------------------------------------ SEDS parametrization
+DIRECTION_EPS = 1e-8  # as seds_casadi.core.parametrization
+
+
+def _tril(layout, v):
+    M = np.zeros((layout.d, layout.d))
+    for (i, j), x in zip(layout.tril, v):
+        M[i, j] = np.exp(x) if i == j else x
+    return M
+
+
+def unpack(theta: np.ndarray, layout, margin: float) -> dict:
+    """Model arrays (scaled attractor frame) from theta, in numpy.
+
+    Returns
+    -------
+    dict with ``priors`` (K,), ``mu`` (K, d), ``Sx`` (K, d, d), ``A`` (K, d, d), and ``Q`` (K, d, d)
+    when the layout has noise factors.
+    """
+    K, d = layout.K, layout.d
+    logits = np.r_[theta[: layout.n_logits], 0.0]
+    logits = logits - logits.max()
+    priors = np.exp(logits) / np.exp(logits).sum()
+    mu = np.empty((K, d))
+    Sx = np.empty((K, d, d))
+    A = np.empty((K, d, d))
+    Q = np.empty((K, d, d)) if layout.with_noise else None
+    for k in range(K):
+        s = layout.slices(k)
+        mu[k] = theta[s["mu"]]
+        L = _tril(layout, theta[s["L"]])
+        Sx[k] = L @ L.T
+        B = _tril(layout, theta[s["B"]])
+        W = np.zeros((d, d))
+        for (i, j), x in zip(layout.strict, theta[s["W"]]):
+            W[i, j] = x
+        A[k] = -(B @ B.T + margin * np.eye(d)) + (W - W.T)
+        if Q is not None:
+            LQ = _tril(layout, theta[s["Q"]])
+            Q[k] = LQ @ LQ.T
+    out = {"priors": priors, "mu": mu, "Sx": Sx, "A": A}
+    if Q is not None:
+        out["Q"] = Q
+    return out
+
+
+def _log_gauss_rows(X: np.ndarray, mean: np.ndarray, cov: np.ndarray) -> np.ndarray:
+    # an implementation independent of gmm.log_gaussian: explicit inverse and slogdet
+    diff = X - mean
+    inv = np.linalg.inv(cov)
+    _, logdet = np.linalg.slogdet(cov)
+    return -0.5 * (np.einsum("ni,ij,nj->n", diff, inv, diff) + logdet + X.shape[1] * _LOG_2PI)
+
+
+def seds_objective(
+    theta: np.ndarray,
+    layout,
+    X: np.ndarray,
+    Xd: np.ndarray,
+    weights: np.ndarray,
+    objective: str,
+    margin: float,
+) -> float:
+    """The SEDS objective in numpy (reference for the CasADi version and the SciPy baseline).
+
+    Parameters
+    ----------
+    theta : array, shape (layout.size,)
+    X, Xd : array, shape (n, d)
+        Scaled positions (attractor at the origin) and velocities.
+    weights : array, shape (n,)
+        Per-sample weights (Eq. 11 for ``"direction"``; ones otherwise).
+    objective : {"direction", "mse", "likelihood"}
+    margin : float
+        Stability margin m of the parametrization.
+
+    Returns
+    -------
+    float
+        ``"direction"``: Eq. 9 normalised by the weight sum,
+        -sum_i w_i cos(xdot_i, f(x_i)) / sum_i w_i; ``"mse"``: mean_i ||f(x_i) - xdot_i||^2;
+        ``"likelihood"``: -mean_i log p(x_i, xdot_i).
+    """
+    p = unpack(theta, layout, margin)
+    K = layout.K
+    logp = np.stack(
+        [np.log(p["priors"][k]) + _log_gauss_rows(X, p["mu"][k], p["Sx"][k]) for k in range(K)],
+        axis=1,
+    )
+    if objective == "likelihood":
+        for k in range(K):
+            logp[:, k] += _log_gauss_rows(Xd - X @ p["A"][k].T, np.zeros(layout.d), p["Q"][k])
+        m = logp.max(axis=1, keepdims=True)
+        ll = m[:, 0] + np.log(np.exp(logp - m).sum(axis=1))
+        return float(-np.mean(ll))
+    h = np.exp(logp - logp.max(axis=1, keepdims=True))
+    h /= h.sum(axis=1, keepdims=True)
+    f = np.einsum("nk,kij,nj->ni", h, p["A"], X)
+    if objective == "mse":
+        return float(np.mean(np.sum((f - Xd) ** 2, axis=1)))
+    if objective == "direction":
+        num = np.sum(f * Xd, axis=1)
+        den = np.linalg.norm(Xd, axis=1) * np.sqrt(np.sum(f * f, axis=1) + DIRECTION_EPS)
+        valid = np.linalg.norm(Xd, axis=1) > 0
+        cos = np.where(valid, num / np.where(valid, den, 1.0), 0.0)
+        return float(-np.sum(weights * cos) / np.sum(weights))
+    raise ValueError(f"unknown objective {objective!r}")

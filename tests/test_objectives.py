@@ -5,10 +5,12 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from oracles import seds_objective as objective_numpy
+from oracles import unpack as unpack_oracle
 
 from seds_casadi import SEDS
-from seds_casadi.core.objectives import SumKernels, unpack_casadi
-from seds_casadi.core.parametrization import OBJECTIVES, Layout, objective_numpy, unpack_numpy
+from seds_casadi.core.objectives import SumKernels
+from seds_casadi.core.parametrization import OBJECTIVES, Layout, unpack_casadi, unpack_numpy
 
 MARGIN = 1e-3
 
@@ -85,6 +87,9 @@ def test_every_parameter_vector_is_a_stable_model(K, d, seed):
     layout = Layout(K, d, with_noise=True)
     theta = 2.0 * np.random.default_rng(seed).standard_normal(layout.size)
     p = unpack_numpy(theta, layout, MARGIN)
+    ref = unpack_oracle(theta, layout, MARGIN)
+    for key in ref:
+        np.testing.assert_allclose(p[key], ref[key], rtol=1e-10, atol=1e-12)
     assert np.all(p["priors"] > 0) and np.sum(p["priors"]) == pytest.approx(1.0)
     for k in range(K):
         assert np.linalg.eigvalsh(p["A"][k] + p["A"][k].T).max() <= -2 * MARGIN * (1 - 1e-9)

@@ -20,62 +20,11 @@ import numpy as np
 
 from ..codegen import compile_functions
 from .gmm import logsumexp_parts_sx
-from .parametrization import DIRECTION_EPS, Layout
+from .parametrization import DIRECTION_EPS, Layout, unpack_casadi
 
 __all__ = ["sample_objective", "SumKernels", "approach_constraints"]
 
 _LOG_2PI = float(np.log(2.0 * np.pi))
-
-
-def _tril_sx(v: ca.SX, layout: Layout) -> ca.SX:
-    M = ca.SX.zeros(layout.d, layout.d)
-    for idx, (i, j) in enumerate(layout.tril):
-        M[i, j] = ca.exp(v[idx]) if i == j else v[idx]
-    return M
-
-
-def _tril_inverse_sx(L: ca.SX, d: int) -> ca.SX:
-    """Inverse of a lower-triangular matrix by forward substitution (small explicit graph)."""
-    inv = ca.SX.zeros(d, d)
-    for j in range(d):
-        inv[j, j] = 1.0 / L[j, j]
-        for i in range(j + 1, d):
-            acc = 0
-            for m in range(j, i):
-                acc += L[i, m] * inv[m, j]
-            inv[i, j] = -acc / L[i, i]
-    return inv
-
-
-def unpack_casadi(theta: ca.SX, layout: Layout, margin: float) -> dict:
-    """Symbolic model pieces from theta: the same maths as ``unpack_numpy``, written for CasADi.
-
-    Returns a dict of lists over components: ``logpi``, ``mu``, ``Linv`` (inverse Cholesky factor
-    of Sigma_x), ``logdet`` (log |Sigma_x|), ``A``, and ``LQinv``/``logdetQ`` with noise factors.
-    """
-    K, d = layout.K, layout.d
-    logits = ca.vertcat(theta[: layout.n_logits], 0)
-    top = ca.mmax(logits)
-    lse = ca.log(ca.sum1(ca.exp(logits - top))) + top
-    out = {k: [] for k in ("logpi", "mu", "Linv", "logdet", "A", "LQinv", "logdetQ")}
-    diag_pos = [idx for idx, (i, j) in enumerate(layout.tril) if i == j]
-    for k in range(K):
-        s = layout.slices(k)
-        out["logpi"].append(logits[k] - lse)
-        out["mu"].append(theta[s["mu"]])
-        Lv = theta[s["L"]]
-        out["Linv"].append(_tril_inverse_sx(_tril_sx(Lv, layout), d))
-        out["logdet"].append(2 * sum(Lv[i] for i in diag_pos))
-        B = _tril_sx(theta[s["B"]], layout)
-        W = ca.SX.zeros(d, d)
-        for idx, (i, j) in enumerate(layout.strict):
-            W[i, j] = theta[s["W"]][idx]
-        out["A"].append(-(B @ B.T + margin * ca.SX.eye(d)) + (W - W.T))
-        if layout.with_noise:
-            Qv = theta[s["Q"]]
-            out["LQinv"].append(_tril_inverse_sx(_tril_sx(Qv, layout), d))
-            out["logdetQ"].append(2 * sum(Qv[i] for i in diag_pos))
-    return out
 
 
 def sample_objective(layout: Layout, objective: str, margin: float) -> ca.Function:

@@ -17,18 +17,21 @@ All quantities are in the *scaled attractor frame*: x* at the origin, positions 
 scalar ``sx`` and velocities by one scalar ``sv``. A scalar scaling keeps A_k + A_k^T < 0 (a
 per-axis scaling would not), so the certificate holds in the caller's units too.
 
-The objective functions in CasADi live in :mod:`seds_casadi.seds`; an independent numpy
-implementation of the same objectives (used in tests and as the SciPy baseline) is here.
+The parametrization is defined once, in CasADi (:func:`unpack_casadi`); :func:`unpack_numpy`
+evaluates it. The objectives are in :mod:`seds_casadi.core.objectives`; an independent numpy
+implementation of both (a test oracle and the SciPy baseline's objective) is in ``tests/oracles.py``.
 """
 
 from __future__ import annotations
 
+import functools
+
+import casadi as ca
 import numpy as np
 
-__all__ = ["Layout", "unpack_numpy", "objective_numpy", "OBJECTIVES"]
+__all__ = ["Layout", "unpack_casadi", "unpack_numpy", "OBJECTIVES"]
 
 OBJECTIVES = ("direction", "mse", "likelihood")
-_LOG_2PI = float(np.log(2.0 * np.pi))
 #: smoothing of the model speed in the cosine of Eq. 9 (scaled units), avoids 0/0 at ||f|| = 0
 DIRECTION_EPS = 1e-8
 
@@ -69,21 +72,81 @@ class Layout:
             out["Q"] = slice(o, o + self.n_tril)
         return out
 
-    # numpy conversions --------------------------------------------------------
-    def tril_numpy(self, v: np.ndarray) -> np.ndarray:
-        """Lower-triangular matrix from its packed entries, diagonal through exp."""
-        M = np.zeros((self.d, self.d))
-        for (i, j), x in zip(self.tril, v):
-            M[i, j] = np.exp(x) if i == j else x
-        return M
-
     def pack_tril(self, M: np.ndarray) -> np.ndarray:
-        """Inverse of :meth:`tril_numpy` (M lower triangular, positive diagonal)."""
+        """Packed entries of a lower-triangular M with positive diagonal (log on the diagonal):
+        the inverse of how :func:`unpack_casadi` builds L, B and L_Q."""
         return np.array([np.log(M[i, j]) if i == j else M[i, j] for i, j in self.tril])
 
 
+def _tril_sx(v: ca.SX, layout: Layout) -> ca.SX:
+    M = ca.SX.zeros(layout.d, layout.d)
+    for idx, (i, j) in enumerate(layout.tril):
+        M[i, j] = ca.exp(v[idx]) if i == j else v[idx]
+    return M
+
+
+def _tril_inverse_sx(L: ca.SX, d: int) -> ca.SX:
+    """Inverse of a lower-triangular matrix by forward substitution (small explicit graph)."""
+    inv = ca.SX.zeros(d, d)
+    for j in range(d):
+        inv[j, j] = 1.0 / L[j, j]
+        for i in range(j + 1, d):
+            acc = 0
+            for m in range(j, i):
+                acc += L[i, m] * inv[m, j]
+            inv[i, j] = -acc / L[i, i]
+    return inv
+
+
+def unpack_casadi(theta: ca.SX, layout: Layout, margin: float) -> dict:
+    """Model pieces from theta as SX: the one definition of the parametrization (module docstring).
+
+    Returns a dict of lists over components: ``logpi``, ``mu``, ``L`` (Cholesky factor of
+    Sigma_x), ``Linv`` (its inverse), ``logdet`` (log |Sigma_x|), ``A``, and ``LQ``, ``LQinv``,
+    ``logdetQ`` with noise factors.
+    """
+    K, d = layout.K, layout.d
+    logits = ca.vertcat(theta[: layout.n_logits], 0)
+    top = ca.mmax(logits)
+    lse = ca.log(ca.sum1(ca.exp(logits - top))) + top
+    out = {k: [] for k in ("logpi", "mu", "L", "Linv", "logdet", "A", "LQ", "LQinv", "logdetQ")}
+    diag_pos = [idx for idx, (i, j) in enumerate(layout.tril) if i == j]
+    for k in range(K):
+        s = layout.slices(k)
+        out["logpi"].append(logits[k] - lse)
+        out["mu"].append(theta[s["mu"]])
+        Lv = theta[s["L"]]
+        L = _tril_sx(Lv, layout)
+        out["L"].append(L)
+        out["Linv"].append(_tril_inverse_sx(L, d))
+        out["logdet"].append(2 * sum(Lv[i] for i in diag_pos))
+        B = _tril_sx(theta[s["B"]], layout)
+        W = ca.SX.zeros(d, d)
+        for idx, (i, j) in enumerate(layout.strict):
+            W[i, j] = theta[s["W"]][idx]
+        out["A"].append(-(B @ B.T + margin * ca.SX.eye(d)) + (W - W.T))
+        if layout.with_noise:
+            Qv = theta[s["Q"]]
+            LQ = _tril_sx(Qv, layout)
+            out["LQ"].append(LQ)
+            out["LQinv"].append(_tril_inverse_sx(LQ, d))
+            out["logdetQ"].append(2 * sum(Qv[i] for i in diag_pos))
+    return out
+
+
+@functools.lru_cache(maxsize=64)
+def _unpack_function(K: int, d: int, with_noise: bool, margin: float) -> ca.Function:
+    layout = Layout(K, d, with_noise)
+    theta = ca.SX.sym("theta", layout.size)
+    p = unpack_casadi(theta, layout, margin)
+    outs = [ca.vertcat(*p["logpi"]), *p["mu"], *p["L"], *p["A"]]
+    if with_noise:
+        outs += p["LQ"]
+    return ca.Function("unpack", [theta], outs)
+
+
 def unpack_numpy(theta: np.ndarray, layout: Layout, margin: float) -> dict[str, np.ndarray]:
-    """Model arrays (scaled attractor frame) from theta, in numpy.
+    """Numerical values of :func:`unpack_casadi`: model arrays (scaled attractor frame) from theta.
 
     Returns
     -------
@@ -91,90 +154,12 @@ def unpack_numpy(theta: np.ndarray, layout: Layout, margin: float) -> dict[str, 
     when the layout has noise factors.
     """
     K, d = layout.K, layout.d
-    logits = np.r_[theta[: layout.n_logits], 0.0]
-    logits = logits - logits.max()
-    priors = np.exp(logits) / np.exp(logits).sum()
-    mu = np.empty((K, d))
-    Sx = np.empty((K, d, d))
-    A = np.empty((K, d, d))
-    Q = np.empty((K, d, d)) if layout.with_noise else None
-    for k in range(K):
-        s = layout.slices(k)
-        mu[k] = theta[s["mu"]]
-        L = layout.tril_numpy(theta[s["L"]])
-        Sx[k] = L @ L.T
-        B = layout.tril_numpy(theta[s["B"]])
-        W = np.zeros((d, d))
-        for (i, j), x in zip(layout.strict, theta[s["W"]]):
-            W[i, j] = x
-        A[k] = -(B @ B.T + margin * np.eye(d)) + (W - W.T)
-        if Q is not None:
-            LQ = layout.tril_numpy(theta[s["Q"]])
-            Q[k] = LQ @ LQ.T
-    out = {"priors": priors, "mu": mu, "Sx": Sx, "A": A}
-    if Q is not None:
-        out["Q"] = Q
-    return out
-
-
-def _log_gauss_rows(X: np.ndarray, mean: np.ndarray, cov: np.ndarray) -> np.ndarray:
-    # an implementation independent of gmm.log_gaussian: explicit inverse and slogdet
-    diff = X - mean
-    inv = np.linalg.inv(cov)
-    _, logdet = np.linalg.slogdet(cov)
-    return -0.5 * (np.einsum("ni,ij,nj->n", diff, inv, diff) + logdet + X.shape[1] * _LOG_2PI)
-
-
-def objective_numpy(
-    theta: np.ndarray,
-    layout: Layout,
-    X: np.ndarray,
-    Xd: np.ndarray,
-    weights: np.ndarray,
-    objective: str,
-    margin: float,
-) -> float:
-    """The SEDS objective in numpy (reference for the CasADi version and the SciPy baseline).
-
-    Parameters
-    ----------
-    theta : array, shape (layout.size,)
-    X, Xd : array, shape (n, d)
-        Scaled positions (attractor at the origin) and velocities.
-    weights : array, shape (n,)
-        Per-sample weights (Eq. 11 for ``"direction"``; ones otherwise).
-    objective : {"direction", "mse", "likelihood"}
-    margin : float
-        Stability margin m of the parametrization.
-
-    Returns
-    -------
-    float
-        ``"direction"``: Eq. 9 normalised by the weight sum,
-        -sum_i w_i cos(xdot_i, f(x_i)) / sum_i w_i; ``"mse"``: mean_i ||f(x_i) - xdot_i||^2;
-        ``"likelihood"``: -mean_i log p(x_i, xdot_i).
-    """
-    p = unpack_numpy(theta, layout, margin)
-    K = layout.K
-    logp = np.stack(
-        [np.log(p["priors"][k]) + _log_gauss_rows(X, p["mu"][k], p["Sx"][k]) for k in range(K)],
-        axis=1,
-    )
-    if objective == "likelihood":
-        for k in range(K):
-            logp[:, k] += _log_gauss_rows(Xd - X @ p["A"][k].T, np.zeros(layout.d), p["Q"][k])
-        m = logp.max(axis=1, keepdims=True)
-        ll = m[:, 0] + np.log(np.exp(logp - m).sum(axis=1))
-        return float(-np.mean(ll))
-    h = np.exp(logp - logp.max(axis=1, keepdims=True))
-    h /= h.sum(axis=1, keepdims=True)
-    f = np.einsum("nk,kij,nj->ni", h, p["A"], X)
-    if objective == "mse":
-        return float(np.mean(np.sum((f - Xd) ** 2, axis=1)))
-    if objective == "direction":
-        num = np.sum(f * Xd, axis=1)
-        den = np.linalg.norm(Xd, axis=1) * np.sqrt(np.sum(f * f, axis=1) + DIRECTION_EPS)
-        valid = np.linalg.norm(Xd, axis=1) > 0
-        cos = np.where(valid, num / np.where(valid, den, 1.0), 0.0)
-        return float(-np.sum(weights * cos) / np.sum(weights))
-    raise ValueError(f"unknown objective {objective!r}; valid: {', '.join(OBJECTIVES)}")
+    f = _unpack_function(K, d, layout.with_noise, float(margin))
+    out = [np.asarray(v) for v in f(np.asarray(theta, dtype=float))]
+    L = np.stack(out[1 + K: 1 + 2 * K])
+    res = {"priors": np.exp(out[0].ravel()), "mu": np.stack([v.ravel() for v in out[1: 1 + K]]),
+           "Sx": L @ np.transpose(L, (0, 2, 1)), "A": np.stack(out[1 + 2 * K: 1 + 3 * K])}
+    if layout.with_noise:
+        LQ = np.stack(out[1 + 3 * K:])
+        res["Q"] = LQ @ np.transpose(LQ, (0, 2, 1))
+    return res
