@@ -6,9 +6,10 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
-from seds_casadi.app.play import SHOT_COLUMNS
+from seds_casadi.app.play import SHOT_COLUMNS, PlayConfig, play
 
 SCRIPT = Path(sys.executable).parent / "seds-casadi"
 
@@ -67,3 +68,29 @@ def test_play_bad_input_is_a_clear_error(tmp_path):
     assert r.returncode == 2 and "no motion" in r.stderr
     r = _run("play", "--quick", "--field", "moon", "--out", str(tmp_path / "z"))
     assert r.returncode == 2 and "no field 'moon'" in r.stderr
+
+
+def test_play_config_checks_its_values_and_takes_overrides():
+    cfg = PlayConfig(robot="katana", quick=True, out="x", learners=["gmr"])
+    assert cfg.learners == ("gmr",) and cfg.shots == 20
+    assert cfg.effective().shots == 3 and cfg.effective().validate_shots == 1
+    assert PlayConfig(shots=np.int64(5)).shots == 5
+    with pytest.raises(ValueError, match="unknown learner 'svm'"):
+        PlayConfig(learners=("gpr", "svm"))
+    with pytest.raises(ValueError, match="shots must be at least 1, got 0"):
+        PlayConfig(shots=0)
+    with pytest.raises(ValueError, match="shots must be a whole number"):
+        PlayConfig(shots=2.5)
+    with pytest.raises(ValueError, match="validate_shots must be at least 0"):
+        PlayConfig(validate_shots=-1)
+    with pytest.raises(ValueError, match="workers must be at least 1"):
+        PlayConfig(workers=0)
+    with pytest.raises(ValueError, match="at least one learner"):
+        PlayConfig(learners=())
+    # overrides are checked before any work
+    with pytest.raises(TypeError, match="no setting 'robots'; valid: robot, field"):
+        play(robots="wam")
+    with pytest.raises(TypeError, match="config must be a PlayConfig"):
+        play("wam")
+    with pytest.raises(ValueError, match="unknown robot 'r2d2'"):
+        play(PlayConfig(robot="r2d2"), out="unused")

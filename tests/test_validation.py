@@ -8,7 +8,7 @@ import warnings
 import numpy as np
 import pytest
 
-from seds_casadi.app.validate import VALIDATION_COLUMNS
+from seds_casadi.app.validate import VALIDATION_COLUMNS, ValidateConfig, validate
 from seds_casadi.minigolf.ball import impact, simulate_shots
 from seds_casadi.minigolf.fields import Field, load_field
 from seds_casadi.minigolf.teacher import Stroke, Teacher
@@ -149,3 +149,13 @@ def test_validate_command_line(tmp_path):
         assert float(row["final_distance_m"]) < 0.05
     assert (out / "validation.png").stat().st_size > 1000
     assert "sinks agree" in (out / "report.txt").read_text()
+
+
+def test_validate_config_checks_its_values():
+    assert ValidateConfig(field="arctan", shots=3).robot == "wam"
+    with pytest.raises(ValueError, match="shots must be at least 1"):
+        ValidateConfig(shots=0)
+    with pytest.raises(ValueError, match="seed must be a whole number"):
+        ValidateConfig(seed="x")
+    with pytest.raises(TypeError, match="no setting 'robot_name'"):
+        validate(robot_name="wam")
