@@ -34,10 +34,16 @@ def test_play_quick_writes_shots_summary_figures_and_models(quick_run):
     with open(out / "shots.csv") as fh:
         rows = list(csv.DictReader(fh))
     assert tuple(rows[0]) == SHOT_COLUMNS
+    # every column with a unit names it; the hitting angle is in degrees like the learners'
+    assert SHOT_COLUMNS == ("method", "shot", "ball_x_m", "ball_y_m", "hole_x_m", "hole_y_m",
+                            "alpha_deg", "kappa", "hit", "sunk", "direction_error_deg",
+                            "speed_error", "final_x_m", "final_y_m", "sunk_exudyn")
     assert {row["method"] for row in rows} == {"gpr", "gmr"} and len(rows) == 6
     for row in rows:
         assert row["hit"] in ("True", "False") and row["sunk"] in ("True", "False")
-        assert -0.45 <= float(row["ball_y"]) <= 0.45
+        assert -0.45 <= float(row["ball_y_m"]) <= 0.45
+    # on arctan the ball is hit across the slope: angles of degrees, not fractions of a radian
+    assert max(abs(float(row["alpha_deg"])) for row in rows) > 2.0
     # every shot the robot hit came within 2 deg and 5 % of the commanded velocity
     hit = [row for row in rows if row["hit"] == "True"]
     assert hit and all(float(row["direction_error_deg"]) < 2 for row in hit)

@@ -179,6 +179,12 @@ def test_table1_runs_end_to_end_and_is_identical_on_local_processes(datasets, tm
     with open(path) as fh:
         rows = list(csv.reader(fh))
     assert tuple(rows[0]) == CSV_COLUMNS and len(rows) == len(means) + 1
+    assert CSV_COLUMNS == ("field", "training", "model", "rmse_angle_deg", "rmse_speed_mps",
+                           "success_rate", "n_params")
+    # the angle's RMSE in degrees and an empty speed on the double hill (angle only)
+    row = dict(zip(rows[0], rows[1]))
+    assert float(row["rmse_angle_deg"]) == pytest.approx(means[0].rmse_angle, rel=1e-5)
+    assert row["rmse_speed_mps"] == "" and row["field"] == "double_hill"
     assert "paper" in format_table1(means)
 
 

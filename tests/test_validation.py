@@ -143,6 +143,9 @@ def test_validate_command_line(tmp_path):
     with open(out / "validation.csv") as fh:
         rows = list(csv.DictReader(fh))
     assert tuple(rows[0]) == VALIDATION_COLUMNS and len(rows) == 2
+    assert VALIDATION_COLUMNS == ("field", "robot", "shot", "sunk_fast", "sunk_exudyn",
+                                  "impact_direction_error_deg", "impact_speed_error",
+                                  "final_distance_m")
     for row in rows:
         assert row["sunk_fast"] == row["sunk_exudyn"]
         assert float(row["impact_speed_error"]) < 0.1

@@ -31,9 +31,11 @@ __all__ = ["play", "play_shot", "PlayConfig", "SHOT_COLUMNS", "LEARNERS"]
 
 _LOG = logging.getLogger(__name__)
 
-SHOT_COLUMNS = ("method", "shot", "ball_x", "ball_y", "hole_x", "hole_y", "alpha", "kappa",
-                "hit", "sunk", "direction_error_deg", "speed_error", "final_x", "final_y",
-                "sunk_exudyn")
+#: columns of ``shots.csv``; a unit ends the name (m, deg), dimensionless ones have none
+#: (kappa, the gain; speed_error, relative to the commanded speed)
+SHOT_COLUMNS = ("method", "shot", "ball_x_m", "ball_y_m", "hole_x_m", "hole_y_m", "alpha_deg",
+                "kappa", "hit", "sunk", "direction_error_deg", "speed_error", "final_x_m",
+                "final_y_m", "sunk_exudyn")
 LEARNERS = ("gpr", "gmr")
 _VALID_LEARNERS = ("gpr", "gmr", "sep_gmr")
 
@@ -117,8 +119,9 @@ def play_shot(task: dict) -> dict:
 
     ``task`` has ``method, shot, ball (2,), hole (2,), alpha [rad], kappa, robot, field (name),
     field_spec (dict), motion`` (a :class:`~seds_casadi.motion.HittingMotion` or the folder it
-    was saved in). Returns the shot's row of ``shots.csv`` (:data:`SHOT_COLUMNS`) plus the
-    ball's ``path`` when the robot hit it, and ``error`` when the swing could not start."""
+    was saved in). Returns the shot's row of ``shots.csv`` (:data:`SHOT_COLUMNS`: the angle
+    in degrees) plus the ball's ``path`` when the robot hit it, and ``error`` when the swing
+    could not start."""
     from ..minigolf.ball import BALL_RADIUS, impact, simulate_shots
     from ..minigolf.fields import Field
     from ..robots.control import place_robot, simulate_swing
@@ -128,10 +131,11 @@ def play_shot(task: dict) -> dict:
     ball, hole = np.asarray(task["ball"]), np.asarray(task["hole"])
     robot = place_robot(task["robot"], ball, field)
     z = float(field.surface.height(ball[None])[0]) + BALL_RADIUS
-    row = {"method": task["method"], "shot": task["shot"], "ball_x": ball[0], "ball_y": ball[1],
-           "hole_x": hole[0], "hole_y": hole[1], "alpha": task["alpha"],
-           "kappa": task["kappa"], "hit": False, "sunk": False, "direction_error_deg": np.nan,
-           "speed_error": np.nan, "final_x": ball[0], "final_y": ball[1], "sunk_exudyn": ""}
+    row = {"method": task["method"], "shot": task["shot"], "ball_x_m": ball[0],
+           "ball_y_m": ball[1], "hole_x_m": hole[0], "hole_y_m": hole[1],
+           "alpha_deg": float(np.rad2deg(task["alpha"])), "kappa": task["kappa"], "hit": False,
+           "sunk": False, "direction_error_deg": np.nan, "speed_error": np.nan,
+           "final_x_m": ball[0], "final_y_m": ball[1], "sunk_exudyn": ""}
     try:
         swing = simulate_swing(robot, motion, np.array([ball[0], ball[1], z]), task["alpha"],
                                task["kappa"])
@@ -145,8 +149,8 @@ def play_shot(task: dict) -> dict:
     res = simulate_shots(field, ball[None], launch, hole=hole, engine="numpy", record_paths=True)
     row.update(hit=True, sunk=bool(res.sunk[0]),
                direction_error_deg=swing.direction_error_deg, speed_error=swing.speed_error,
-               final_x=float(res.final_position[0, 0]),
-               final_y=float(res.final_position[0, 1]), path=res.paths[0])
+               final_x_m=float(res.final_position[0, 0]),
+               final_y_m=float(res.final_position[0, 1]), path=res.paths[0])
     return row
 
 
@@ -335,8 +339,8 @@ def _figures(fld, motion, data, fitted, rows, learners, out) -> None:
         rs = [r for r in rows if r["method"] == m]
         plot_field(fld, ax=ax, paths=[r["path"] for r in rs if "path" in r],
                    sunk=[r["sunk"] for r in rs if "path" in r],
-                   ball=np.array([[r["ball_x"], r["ball_y"]] for r in rs]),
-                   hole=np.array([[r["hole_x"], r["hole_y"]] for r in rs]))
+                   ball=np.array([[r["ball_x_m"], r["ball_y_m"]] for r in rs]),
+                   hole=np.array([[r["hole_x_m"], r["hole_y_m"]] for r in rs]))
         ax.set_title(f"{m}: {np.mean([r['sunk'] for r in rs]):.0%} sunk (green: sunk, red: "
                      f"missed)", fontsize=9)
     save_figure(fig, os.path.join(out, "shots.png"))

@@ -22,6 +22,8 @@ __all__ = ["validate", "ValidateConfig", "VALIDATION_COLUMNS"]
 
 _LOG = logging.getLogger(__name__)
 
+#: columns of ``validation.csv``; a unit ends the name (deg, m), impact_speed_error is relative
+#: to the fast model's launch speed
 VALIDATION_COLUMNS = ("field", "robot", "shot", "sunk_fast", "sunk_exudyn",
                       "impact_direction_error_deg", "impact_speed_error", "final_distance_m")
 _NOT_COMPARED = {"impact_direction_error_deg": np.nan, "impact_speed_error": np.nan,
