@@ -1,6 +1,7 @@
 """The command line (through the installed console script) and the LASA benchmark runner."""
 
 import csv
+import logging
 import os
 import shutil
 import subprocess
@@ -10,6 +11,7 @@ import numpy as np
 import pytest
 
 from seds_casadi import StableDS, save_demonstrations
+from seds_casadi.app.cli import build_parser, command_logging
 from seds_casadi.app.lasa import CSV_COLUMNS, evaluate_shape, run_lasa
 from seds_casadi.core.datasets import LASA_SHAPES, LASA_SINGLE_SHAPES, load_lasa
 
@@ -91,3 +93,21 @@ def test_run_lasa_in_process_pool_matches_serial():
     assert np.isfinite(a[0].dtwd)
     with pytest.raises(ValueError, match="workers"):
         run_lasa(workers=0, **kw)
+
+
+def test_command_logging_prints_the_commands_progress_plainly(capsys):
+    log = logging.getLogger("seds_casadi.app.play")
+    with command_logging():
+        log.info("teacher: %d good shots on %s", 56, "arctan")
+        log.info("table\n  two lines\n")
+        # the lower layers' progress (e.g. compiling a kernel) stays out of the output
+        logging.getLogger("seds_casadi.codegen.cache").info("compiling ball_steps")
+    with command_logging(quiet=True):
+        log.info("not with --quiet")
+        log.warning("a warning goes to stderr")
+    log.info("outside a command: not printed")
+    out, err = capsys.readouterr()
+    assert out == "teacher: 56 good shots on arctan\ntable\n  two lines\n\n"
+    assert err == "a warning goes to stderr\n"
+    assert build_parser().parse_args(["play", "--quiet"]).quiet
+    assert not build_parser().parse_args(["table1"]).quiet

@@ -6,9 +6,10 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
-from seds_casadi.app.play import SHOT_COLUMNS
+from seds_casadi.app.play import SHOT_COLUMNS, PlayConfig, play
 
 SCRIPT = Path(sys.executable).parent / "seds-casadi"
 
@@ -33,10 +34,16 @@ def test_play_quick_writes_shots_summary_figures_and_models(quick_run):
     with open(out / "shots.csv") as fh:
         rows = list(csv.DictReader(fh))
     assert tuple(rows[0]) == SHOT_COLUMNS
+    # every column with a unit names it; the hitting angle is in degrees like the learners'
+    assert SHOT_COLUMNS == ("method", "shot", "ball_x_m", "ball_y_m", "hole_x_m", "hole_y_m",
+                            "alpha_deg", "kappa", "hit", "sunk", "direction_error_deg",
+                            "speed_error", "final_x_m", "final_y_m", "sunk_exudyn")
     assert {row["method"] for row in rows} == {"gpr", "gmr"} and len(rows) == 6
     for row in rows:
         assert row["hit"] in ("True", "False") and row["sunk"] in ("True", "False")
-        assert -0.45 <= float(row["ball_y"]) <= 0.45
+        assert -0.45 <= float(row["ball_y_m"]) <= 0.45
+    # on arctan the ball is hit across the slope: angles of degrees, not fractions of a radian
+    assert max(abs(float(row["alpha_deg"])) for row in rows) > 2.0
     # every shot the robot hit came within 2 deg and 5 % of the commanded velocity
     hit = [row for row in rows if row["hit"] == "True"]
     assert hit and all(float(row["direction_error_deg"]) < 2 for row in hit)
@@ -67,3 +74,29 @@ def test_play_bad_input_is_a_clear_error(tmp_path):
     assert r.returncode == 2 and "no motion" in r.stderr
     r = _run("play", "--quick", "--field", "moon", "--out", str(tmp_path / "z"))
     assert r.returncode == 2 and "no field 'moon'" in r.stderr
+
+
+def test_play_config_checks_its_values_and_takes_overrides():
+    cfg = PlayConfig(robot="katana", quick=True, out="x", learners=["gmr"])
+    assert cfg.learners == ("gmr",) and cfg.shots == 20
+    assert cfg.effective().shots == 3 and cfg.effective().validate_shots == 1
+    assert PlayConfig(shots=np.int64(5)).shots == 5
+    with pytest.raises(ValueError, match="unknown learner 'svm'"):
+        PlayConfig(learners=("gpr", "svm"))
+    with pytest.raises(ValueError, match="shots must be at least 1, got 0"):
+        PlayConfig(shots=0)
+    with pytest.raises(ValueError, match="shots must be a whole number"):
+        PlayConfig(shots=2.5)
+    with pytest.raises(ValueError, match="validate_shots must be at least 0"):
+        PlayConfig(validate_shots=-1)
+    with pytest.raises(ValueError, match="workers must be at least 1"):
+        PlayConfig(workers=0)
+    with pytest.raises(ValueError, match="at least one learner"):
+        PlayConfig(learners=())
+    # overrides are checked before any work
+    with pytest.raises(TypeError, match="no setting 'robots'; valid: robot, field"):
+        play(robots="wam")
+    with pytest.raises(TypeError, match="config must be a PlayConfig"):
+        play("wam")
+    with pytest.raises(ValueError, match="unknown robot 'r2d2'"):
+        play(PlayConfig(robot="r2d2"), out="unused")

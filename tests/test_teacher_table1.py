@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from seds_casadi.app.executors import InlineExecutor, open_executor
+from seds_casadi.app.table1 import Table1Config, table1_command
 from seds_casadi.minigolf.ball import simulate_shots
 from seds_casadi.minigolf.fields import load_field
 from seds_casadi.minigolf.table1 import (
@@ -178,6 +179,12 @@ def test_table1_runs_end_to_end_and_is_identical_on_local_processes(datasets, tm
     with open(path) as fh:
         rows = list(csv.reader(fh))
     assert tuple(rows[0]) == CSV_COLUMNS and len(rows) == len(means) + 1
+    assert CSV_COLUMNS == ("field", "training", "model", "rmse_angle_deg", "rmse_speed_mps",
+                           "success_rate", "n_params")
+    # the angle's RMSE in degrees and an empty speed on the double hill (angle only)
+    row = dict(zip(rows[0], rows[1]))
+    assert float(row["rmse_angle_deg"]) == pytest.approx(means[0].rmse_angle, rel=1e-5)
+    assert row["rmse_speed_mps"] == "" and row["field"] == "double_hill"
     assert "paper" in format_table1(means)
 
 
@@ -233,6 +240,21 @@ def test_table1_command_line_quick(tmp_path):
                           "--out", str(tmp_path / "x")], capture_output=True, text=True,
                          timeout=120)
     assert bad.returncode == 2 and "no field 'moon'" in bad.stderr
+
+
+def test_table1_config_checks_its_values():
+    assert Table1Config().fields == ("rough_flat", "double_hill", "arctan")
+    assert Table1Config(fields="arctan").fields == ("arctan",)  # one name, not its letters
+    assert Table1Config(quick=True).effective().repetitions == 3
+    assert Table1Config(quick=True, repetitions=2).effective().repetitions == 2
+    with pytest.raises(ValueError, match="repetitions must be at least 1, got 0"):
+        Table1Config(repetitions=0)
+    with pytest.raises(ValueError, match="at least one field"):
+        Table1Config(fields=[])
+    with pytest.raises(ValueError, match="workers must be at least 1"):
+        Table1Config(workers=0)
+    with pytest.raises(TypeError, match="no setting 'field'; valid: fields"):
+        table1_command(field=["double_hill"])
 
 
 def test_the_teacher_keeps_to_direct_shots_unless_banks_are_allowed(datasets):

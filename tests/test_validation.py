@@ -8,7 +8,7 @@ import warnings
 import numpy as np
 import pytest
 
-from seds_casadi.app.validate import VALIDATION_COLUMNS
+from seds_casadi.app.validate import VALIDATION_COLUMNS, ValidateConfig, validate
 from seds_casadi.minigolf.ball import impact, simulate_shots
 from seds_casadi.minigolf.fields import Field, load_field
 from seds_casadi.minigolf.teacher import Stroke, Teacher
@@ -143,9 +143,22 @@ def test_validate_command_line(tmp_path):
     with open(out / "validation.csv") as fh:
         rows = list(csv.DictReader(fh))
     assert tuple(rows[0]) == VALIDATION_COLUMNS and len(rows) == 2
+    assert VALIDATION_COLUMNS == ("field", "robot", "shot", "sunk_fast", "sunk_exudyn",
+                                  "impact_direction_error_deg", "impact_speed_error",
+                                  "final_distance_m")
     for row in rows:
         assert row["sunk_fast"] == row["sunk_exudyn"]
         assert float(row["impact_speed_error"]) < 0.1
         assert float(row["final_distance_m"]) < 0.05
     assert (out / "validation.png").stat().st_size > 1000
     assert "sinks agree" in (out / "report.txt").read_text()
+
+
+def test_validate_config_checks_its_values():
+    assert ValidateConfig(field="arctan", shots=3).robot == "wam"
+    with pytest.raises(ValueError, match="shots must be at least 1"):
+        ValidateConfig(shots=0)
+    with pytest.raises(ValueError, match="seed must be a whole number"):
+        ValidateConfig(seed="x")
+    with pytest.raises(TypeError, match="no setting 'robot_name'"):
+        validate(robot_name="wam")

@@ -7,30 +7,47 @@ lasa    run the LASA handwriting benchmark; write lasa.csv, summary.txt and figu
 table1  the paper's Table 1 (GPR vs GMR for the hitting parameters); write table1.csv, figures
 validate shots by a robot checked in exudyn against the fast ball model; validation.csv, report
 play    the main job: learn, teach, play a round with the robot, check a few shots in exudyn
+
+The commands' library code reports progress through ``logging`` (loggers under
+``seds_casadi.app``); :func:`main` prints those messages plainly on stdout, as the commands
+always printed them (``--quiet``: warnings and errors only).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
+import logging
 import os
 import sys
 import warnings
+from collections.abc import Iterator
 
-__all__ = ["main", "build_parser"]
+__all__ = ["main", "build_parser", "command_logging"]
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``seds-casadi``."""
-    from ..core.datasets import LASA_SHAPES
-    from ..core.parametrization import OBJECTIVES
-    from .lasa import PROTOCOLS
-
     p = argparse.ArgumentParser(
         prog="seds-casadi",
         description="Learn stable dynamical systems (SEDS in CasADi/IPOPT) and play minigolf.",
     )
     sub = p.add_subparsers(dest="command", metavar="COMMAND")
+    # options of the commands that report their progress through logging
+    quiet = argparse.ArgumentParser(add_help=False)
+    quiet.add_argument("--quiet", "-q", action="store_true",
+                       help="print only warnings and errors, not the progress")
+    _add_fit(sub)
+    _add_lasa(sub)
+    _add_table1(sub, quiet)
+    _add_validate(sub, quiet)
+    _add_play(sub, quiet)
+    return p
+
+
+def _add_fit(sub) -> None:
+    from ..core.parametrization import OBJECTIVES
 
     f = sub.add_parser("fit", help="fit a stable DS to demonstrations from a .npz or .csv file",
                        description="Fit SEDS to demonstrations (formats: see "
@@ -45,6 +62,12 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("--seed", type=int, default=0, help="random seed of the initialisation [0]")
     f.add_argument("--max-iter", type=int, default=1000, help="IPOPT iteration limit [1000]")
     f.add_argument("--out", default="seds_out", help="output folder [seds_out]")
+
+
+def _add_lasa(sub) -> None:
+    from ..core.datasets import LASA_SHAPES
+    from ..core.parametrization import OBJECTIVES
+    from .lasa import PROTOCOLS
 
     la = sub.add_parser("lasa", help="run the LASA handwriting benchmark",
                         description="Fit LASA shapes, score reproductions (RMSE, e_dot, DTW) "
@@ -68,9 +91,12 @@ def build_parser() -> argparse.ArgumentParser:
     la.add_argument("--dask", default=None, metavar="ADDRESS",
                     help="run on a Dask scheduler (tcp://host:8786) instead of local workers")
 
+
+def _add_table1(sub, quiet) -> None:
     from ..minigolf.table1 import TABLE1_FIELDS
 
     t = sub.add_parser("table1", help="reproduce the paper's Table 1 on the simulated fields",
+                       parents=[quiet],
                        description="Learn the hitting motion, let the teacher collect good "
                                    "shots on each field, and compare GPR and GMR for the "
                                    "hitting parameters as in the paper's Table 1.")
@@ -88,7 +114,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="3 repetitions and a coarser teacher: a check in about a minute")
     t.add_argument("--out", default="table1_out", help="output folder [table1_out]")
 
+
+def _add_validate(sub, quiet) -> None:
     v = sub.add_parser("validate", help="check shots in an exudyn multibody model",
+                       parents=[quiet],
                        description="Shots chosen by the learned hitting-parameter model and "
                                    "executed by the robot's controller, played on the fast ball "
                                    "model and in exudyn (ball on the field mesh with contact).")
@@ -98,8 +127,10 @@ def build_parser() -> argparse.ArgumentParser:
     v.add_argument("--seed", type=int, default=0, help="random seed [0]")
     v.add_argument("--out", default="validate_out", help="output folder [validate_out]")
 
+
+def _add_play(sub, quiet) -> None:
     pl = sub.add_parser("play", help="the main job: learn the motion and the hitting parameters, "
-                                     "then play a round",
+                                     "then play a round", parents=[quiet],
                         description="Learn the hitting motion (SEDS), let the teacher collect "
                                     "good shots, learn the hitting parameters (GPR and GMR) and "
                                     "play a round of shots with the robot on the field's ball "
@@ -121,7 +152,6 @@ def build_parser() -> argparse.ArgumentParser:
     pl.add_argument("--quick", action="store_true",
                     help="3 situations, a coarse teacher, 1 exudyn check: under a minute")
     pl.add_argument("--out", default="play_out", help="output folder [play_out]")
-    return p
 
 
 def _cmd_fit(a) -> int:
@@ -167,26 +197,68 @@ def _cmd_lasa(a) -> int:
 
 
 def _cmd_table1(a) -> int:
-    from .table1 import table1_command
+    from .table1 import Table1Config, table1_command
 
-    table1_command(a.field, a.repetitions, a.seed, a.out, a.workers, a.dask, a.quick, a.demos,
-                   not a.no_figures, progress=sys.stderr.isatty())
+    table1_command(Table1Config(fields=tuple(a.field), repetitions=a.repetitions, seed=a.seed,
+                                out=a.out, workers=a.workers, dask=a.dask, quick=a.quick,
+                                demos=a.demos, figures=not a.no_figures,
+                                progress=sys.stderr.isatty()))
     return 0
 
 
 def _cmd_validate(a) -> int:
-    from .validate import validate
+    from .validate import ValidateConfig, validate
 
-    validate(a.robot, a.field, a.shots, a.out, a.seed, progress=sys.stderr.isatty())
+    validate(ValidateConfig(robot=a.robot, field=a.field, shots=a.shots, out=a.out, seed=a.seed,
+                            progress=sys.stderr.isatty()))
     return 0
 
 
 def _cmd_play(a) -> int:
-    from .play import play
+    from .play import PlayConfig, play
 
-    play(a.robot, a.field, a.demos, a.learner, a.shots, a.seed, a.out, a.models, a.quick,
-         a.validate, a.workers, a.dask, progress=sys.stderr.isatty())
+    play(PlayConfig(robot=a.robot, field=a.field, demos=a.demos, learners=tuple(a.learner),
+                    shots=a.shots, seed=a.seed, out=a.out, models=a.models, quick=a.quick,
+                    validate_shots=a.validate, workers=a.workers, dask=a.dask,
+                    progress=sys.stderr.isatty()))
     return 0
+
+
+class _PlainHandler(logging.Handler):
+    """Writes each record's message as ``print`` would: INFO and below to the current
+    ``sys.stdout``, warnings and errors to ``sys.stderr``."""
+
+    def emit(self, record: logging.LogRecord) -> None:
+        try:
+            stream = sys.stderr if record.levelno >= logging.WARNING else sys.stdout
+            stream.write(self.format(record) + "\n")
+            stream.flush()
+        except Exception:  # noqa: BLE001 - logging's own convention
+            self.handleError(record)
+
+
+@contextlib.contextmanager
+def command_logging(quiet: bool = False) -> Iterator[None]:
+    """For the duration of a command: the commands' loggers (``seds_casadi.app.*``) print
+    their messages plainly, progress (INFO) on stdout, or with ``quiet`` only warnings and
+    errors (on stderr). The lower layers' loggers are left as they are (their warnings reach
+    stderr through Python's default handler)."""
+    log = logging.getLogger("seds_casadi.app")
+    handler = _PlainHandler()
+    saved = (log.level, log.propagate)
+    log.addHandler(handler)
+    log.setLevel(logging.WARNING if quiet else logging.INFO)
+    log.propagate = False
+    try:
+        yield
+    finally:
+        log.removeHandler(handler)
+        log.setLevel(saved[0])
+        log.propagate = saved[1]
+
+
+_COMMANDS = {"fit": _cmd_fit, "lasa": _cmd_lasa, "table1": _cmd_table1,
+             "validate": _cmd_validate, "play": _cmd_play}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -196,25 +268,17 @@ def main(argv: list[str] | None = None) -> int:
     if a.command is None:
         parser.print_help()
         return 2
+    if a.command not in _COMMANDS:
+        parser.error(f"unknown command {a.command}")
     from ..core.errors import ConvergenceWarning, SEDSError
 
     warnings.simplefilter("always", ConvergenceWarning)
     try:
-        if a.command == "fit":
-            return _cmd_fit(a)
-        if a.command == "lasa":
-            return _cmd_lasa(a)
-        if a.command == "table1":
-            return _cmd_table1(a)
-        if a.command == "validate":
-            return _cmd_validate(a)
-        if a.command == "play":
-            return _cmd_play(a)
+        with command_logging(quiet=getattr(a, "quiet", False)):
+            return _COMMANDS[a.command](a)
     except (ValueError, TypeError, FileNotFoundError, SEDSError) as exc:
         print(f"seds-casadi {a.command}: error: {exc}", file=sys.stderr)
         return 2
-    parser.error(f"unknown command {a.command}")
-    return 2
 
 
 if __name__ == "__main__":  # pragma: no cover

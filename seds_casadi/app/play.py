@@ -1,7 +1,7 @@
 """``seds-casadi play``: the whole pipeline end to end (paper Fig. 5).
 
 1. **Hitting motion**: SEDS + strength factor from the demonstrations (shipped putts by default).
-2. **Teacher**: good shots on the field's ball model (:mod:`seds_casadi.teacher`).
+2. **Teacher**: good shots on the field's ball model (:mod:`seds_casadi.minigolf.teacher`).
 3. **Hitting parameters**: each learner (GPR, GMR) fitted on the teacher's data set.
 4. **A round**: shots from random ball and hole positions; for each shot and learner the
    predicted (alpha, kappa) is executed by the 500 Hz controller on the simulated robot
@@ -11,26 +11,97 @@
 
 Everything learned is saved in ``OUT/models`` (the motion as ``.npz`` files, the teacher's data
 set); ``--models DIR`` reuses them and skips steps 1-2 (the learners of step 3 are refitted from
-the saved data set: they take well under a second).
+the saved data set: they take well under a second). Settings are a :class:`PlayConfig`;
+progress goes to the ``logging`` logger of this module (the command line prints it).
 """
 
 from __future__ import annotations
 
+import logging
 import os
 import time
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ..core._io import atomic_csv, atomic_text
+from ._config import names_tuple, whole_number, with_overrides
 
-__all__ = ["play", "play_shot", "SHOT_COLUMNS"]
+__all__ = ["play", "play_shot", "PlayConfig", "SHOT_COLUMNS", "LEARNERS"]
 
-SHOT_COLUMNS = ("method", "shot", "ball_x", "ball_y", "hole_x", "hole_y", "alpha", "kappa",
-                "hit", "sunk", "direction_error_deg", "speed_error", "final_x", "final_y",
-                "sunk_exudyn")
+_LOG = logging.getLogger(__name__)
+
+#: columns of ``shots.csv``; a unit ends the name (m, deg), dimensionless ones have none
+#: (kappa, the gain; speed_error, relative to the commanded speed)
+SHOT_COLUMNS = ("method", "shot", "ball_x_m", "ball_y_m", "hole_x_m", "hole_y_m", "alpha_deg",
+                "kappa", "hit", "sunk", "direction_error_deg", "speed_error", "final_x_m",
+                "final_y_m", "sunk_exudyn")
 LEARNERS = ("gpr", "gmr")
+_VALID_LEARNERS = ("gpr", "gmr", "sep_gmr")
 
 _MOTIONS: dict = {}
+
+
+@dataclass(frozen=True)
+class PlayConfig:
+    """Settings of :func:`play` (the options of ``seds-casadi play``).
+
+    Attributes
+    ----------
+    robot : str
+        A robot name (:func:`~seds_casadi.robots.models.robot_names`) or a ``.urdf`` file.
+    field : str
+        A field name or a ``.json`` field file.
+    demos : str or None
+        Hitting demonstrations (``.npz``/``.csv``); None: the shipped putts.
+    learners : tuple of {"gpr", "gmr", "sep_gmr"}
+    shots : int
+        Situations in the round (at least 1).
+    seed : int
+    out : str
+        Output folder.
+    models : str or None
+        The ``models/`` folder of an earlier run to reuse (skips learning and teaching).
+    quick : bool
+        At most 3 situations, a coarse teacher and 1 exudyn check.
+    validate_shots : int
+        Shots checked again in exudyn (0: none).
+    workers : int
+        Local worker processes for the round.
+    dask : str or None
+        Address of a Dask scheduler (overrides ``workers``).
+    progress : bool
+        Progress bars (on stderr).
+    """
+
+    robot: str = "wam"
+    field: str = "arctan"
+    demos: str | None = None
+    learners: tuple[str, ...] = LEARNERS
+    shots: int = 20
+    seed: int = 0
+    out: str = "play_out"
+    models: str | None = None
+    quick: bool = False
+    validate_shots: int = 2
+    workers: int = 1
+    dask: str | None = None
+    progress: bool = True
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "learners", names_tuple("learner", self.learners,
+                                                         _VALID_LEARNERS))
+        object.__setattr__(self, "shots", whole_number("shots", self.shots, 1))
+        object.__setattr__(self, "validate_shots",
+                           whole_number("validate_shots", self.validate_shots, 0))
+        object.__setattr__(self, "workers", whole_number("workers", self.workers, 1))
+        object.__setattr__(self, "seed", whole_number("seed", self.seed, 0))
+
+    def effective(self) -> PlayConfig:
+        """The settings actually played: ``quick`` caps the shots and the exudyn checks."""
+        if not self.quick:
+            return self
+        return replace(self, shots=min(self.shots, 3), validate_shots=min(self.validate_shots, 1))
 
 
 def _motion(folder):
@@ -48,7 +119,9 @@ def play_shot(task: dict) -> dict:
 
     ``task`` has ``method, shot, ball (2,), hole (2,), alpha [rad], kappa, robot, field (name),
     field_spec (dict), motion`` (a :class:`~seds_casadi.motion.HittingMotion` or the folder it
-    was saved in). Returns the shot's row of ``shots.csv`` (plus the ball's ``path``)."""
+    was saved in). Returns the shot's row of ``shots.csv`` (:data:`SHOT_COLUMNS`: the angle
+    in degrees) plus the ball's ``path`` when the robot hit it, and ``error`` when the swing
+    could not start."""
     from ..minigolf.ball import BALL_RADIUS, impact, simulate_shots
     from ..minigolf.fields import Field
     from ..robots.control import place_robot, simulate_swing
@@ -58,10 +131,11 @@ def play_shot(task: dict) -> dict:
     ball, hole = np.asarray(task["ball"]), np.asarray(task["hole"])
     robot = place_robot(task["robot"], ball, field)
     z = float(field.surface.height(ball[None])[0]) + BALL_RADIUS
-    row = {"method": task["method"], "shot": task["shot"], "ball_x": ball[0], "ball_y": ball[1],
-           "hole_x": hole[0], "hole_y": hole[1], "alpha": task["alpha"],
-           "kappa": task["kappa"], "hit": False, "sunk": False, "direction_error_deg": np.nan,
-           "speed_error": np.nan, "final_x": ball[0], "final_y": ball[1], "sunk_exudyn": ""}
+    row = {"method": task["method"], "shot": task["shot"], "ball_x_m": ball[0],
+           "ball_y_m": ball[1], "hole_x_m": hole[0], "hole_y_m": hole[1],
+           "alpha_deg": float(np.rad2deg(task["alpha"])), "kappa": task["kappa"], "hit": False,
+           "sunk": False, "direction_error_deg": np.nan, "speed_error": np.nan,
+           "final_x_m": ball[0], "final_y_m": ball[1], "sunk_exudyn": ""}
     try:
         swing = simulate_swing(robot, motion, np.array([ball[0], ball[1], z]), task["alpha"],
                                task["kappa"])
@@ -75,8 +149,8 @@ def play_shot(task: dict) -> dict:
     res = simulate_shots(field, ball[None], launch, hole=hole, engine="numpy", record_paths=True)
     row.update(hit=True, sunk=bool(res.sunk[0]),
                direction_error_deg=swing.direction_error_deg, speed_error=swing.speed_error,
-               final_x=float(res.final_position[0, 0]), final_y=float(res.final_position[0, 1]),
-               path=res.paths[0])
+               final_x_m=float(res.final_position[0, 0]),
+               final_y_m=float(res.final_position[0, 1]), path=res.paths[0])
     return row
 
 
@@ -93,76 +167,57 @@ def _situations(field, data, n: int, rng):
     return balls, holes
 
 
-def play(robot: str = "wam", field: str = "arctan", demos: str | None = None,
-         learners=LEARNERS, shots: int = 20, seed: int = 0, out: str = "play_out",
-         models: str | None = None, quick: bool = False, validate_shots: int = 2,
-         workers: int = 1, dask: str | None = None, progress: bool = True) -> dict:
-    """Run the main job (module docstring); returns a summary dict and writes ``out``."""
+def _reuse_models(models: str, fld):
+    """Steps 1-2 from an earlier run's ``models/`` folder."""
+    from ..minigolf.teacher import HittingDataset
+    from ..motion.hitting import HittingMotion
+
+    src_motion = os.path.join(models, "motion")
+    src_data = os.path.join(models, f"dataset_{fld.name}.npz")
+    for p in (os.path.join(src_motion, "stable_ds.npz"), src_data):
+        if not os.path.exists(p):
+            raise ValueError(f"--models {models}: no {os.path.relpath(p, models)} there; "
+                             f"give the folder a previous 'play --out' wrote as its models/ "
+                             f"(for the field {fld.name!r})")
+    motion = HittingMotion.load(src_motion)
+    data = HittingDataset.load(src_data)
+    _LOG.info("reused the hitting motion and %d good shots from %s", len(data), models)
+    return motion, data
+
+
+def _learn_and_teach(cfg: PlayConfig, fld, times: dict):
+    """Steps 1-2: the hitting motion from the demonstrations, the teacher's good shots."""
     from ..core.demonstrations import load_demonstrations
-    from ..minigolf.fields import load_field
-    from ..minigolf.parameters import make_model
-    from ..minigolf.teacher import HittingDataset, Stroke, collect_dataset
+    from ..minigolf.teacher import Stroke, collect_dataset
     from ..motion.hitting import HittingMotion
     from ..motion.putting_demos import load_hitting_demos
-    from ..robots.models import load_robot, robot_names
-    from .executors import open_executor
 
-    learners = list(learners)
-    bad = [m for m in learners if m not in ("gpr", "gmr", "sep_gmr")]
-    if bad:
-        raise ValueError(f"unknown learner {bad[0]!r}; valid: gpr, gmr, sep_gmr")
-    if robot not in robot_names() and not str(robot).endswith(".urdf"):
-        raise ValueError(f"unknown robot {robot!r}; known: {', '.join(robot_names())}")
-    if int(shots) < 1:
-        raise ValueError(f"shots must be at least 1, got {shots}")
-    if quick:
-        shots, validate_shots = min(int(shots), 3), min(int(validate_shots), 1)
-    fld = load_field(field)
-    load_robot(robot)  # a robot that does not load fails before any work
-    os.makedirs(os.path.join(out, "models"), exist_ok=True)
-    times: dict[str, float] = {}
-    rng = np.random.default_rng(seed)
-
-    # 1-2. hitting motion and the teacher's data, learned or reused
     t0 = time.perf_counter()
-    motion_dir = os.path.join(out, "models", "motion")
-    data_path = os.path.join(out, "models", f"dataset_{fld.name}.npz")
-    if models:
-        src_motion = os.path.join(models, "motion")
-        src_data = os.path.join(models, f"dataset_{fld.name}.npz")
-        for p in (os.path.join(src_motion, "stable_ds.npz"), src_data):
-            if not os.path.exists(p):
-                raise ValueError(f"--models {models}: no {os.path.relpath(p, models)} there; "
-                                 f"give the folder a previous 'play --out' wrote as its models/ "
-                                 f"(for the field {fld.name!r})")
-        motion = HittingMotion.load(src_motion)
-        data = HittingDataset.load(src_data)
-        print(f"reused the hitting motion and {len(data)} good shots from {models}", flush=True)
-    else:
-        d = load_demonstrations(demos) if demos else load_hitting_demos()
-        motion = HittingMotion.fit(d, n_components=3)
-        times["hitting motion (SEDS + GMR)"] = time.perf_counter() - t0
-        print(f"hitting motion: v* = {motion.hitting_speed:.3f} m/s "
-              f"({times['hitting motion (SEDS + GMR)']:.1f} s)", flush=True)
-        t1 = time.perf_counter()
-        data = collect_dataset(fld, Stroke.from_motion(motion), progress=progress,
-                               **({"resolution": (81, 26)} if quick else {}))
-        times["teacher"] = time.perf_counter() - t1
-        print(f"teacher: {len(data)} good shots on {fld.name} ({times['teacher']:.1f} s)",
-              flush=True)
-    motion.save(motion_dir)
-    data.save(data_path)
+    d = load_demonstrations(cfg.demos) if cfg.demos else load_hitting_demos()
+    motion = HittingMotion.fit(d, n_components=3)
+    times["hitting motion (SEDS + GMR)"] = time.perf_counter() - t0
+    _LOG.info("hitting motion: v* = %.3f m/s (%.1f s)", motion.hitting_speed,
+              times["hitting motion (SEDS + GMR)"])
+    t1 = time.perf_counter()
+    data = collect_dataset(fld, Stroke.from_motion(motion), progress=cfg.progress,
+                           **({"resolution": (81, 26)} if cfg.quick else {}))
+    times["teacher"] = time.perf_counter() - t1
+    _LOG.info("teacher: %d good shots on %s (%.1f s)", len(data), fld.name, times["teacher"])
+    return motion, data
 
-    # 3. learners
-    t2 = time.perf_counter()
+
+def _fit_learners(data, learners) -> dict:
+    """Step 3: each hitting-parameter learner on the teacher's data set."""
+    from ..minigolf.parameters import make_model
+
     k = 3 if data.strategy == "minimal_speed" else 2
-    fitted = {m: make_model(m, **({} if m == "gpr" else {"n_components": k})).fit(
+    return {m: make_model(m, **({} if m == "gpr" else {"n_components": k})).fit(
         data.situations, data.outputs) for m in learners}
-    times["hitting-parameter models"] = time.perf_counter() - t2
 
-    # 4. the round
-    t3 = time.perf_counter()
-    balls, holes = _situations(fld, data, int(shots), rng)
+
+def _round_tasks(cfg: PlayConfig, fld, data, fitted: dict, balls, holes,
+                 motion_dir: str) -> list[dict]:
+    """Step 4's tasks: each learner's (alpha, kappa) for each situation (:func:`play_shot`)."""
     tasks = []
     for m, model in fitted.items():
         pred = model.predict(holes - balls)
@@ -170,50 +225,107 @@ def play(robot: str = "wam", field: str = "arctan", demos: str | None = None,
             kappa = float(pred[i, 1]) if pred.shape[1] > 1 else float(data.kappa[0])
             tasks.append({"method": m, "shot": i, "ball": balls[i].tolist(),
                           "hole": holes[i].tolist(), "alpha": float(np.deg2rad(pred[i, 0])),
-                          "kappa": kappa, "robot": robot, "field": fld.name,
+                          "kappa": kappa, "robot": cfg.robot, "field": fld.name,
                           "field_spec": fld.spec, "motion": os.path.abspath(motion_dir)})
-    with open_executor(workers, dask) as ex:
+    return tasks
+
+
+def _play_round(cfg: PlayConfig, tasks: list[dict]) -> list[dict]:
+    """Step 4: the tasks on this process, local workers or Dask; rows in the tasks' order."""
+    from .executors import open_executor
+
+    with open_executor(cfg.workers, cfg.dask) as ex:
         futures = [ex.submit(play_shot, t) for t in tasks]
         it = futures
-        if progress:
+        if cfg.progress:
             from tqdm.auto import tqdm
 
             it = tqdm(futures, desc=f"playing {len(tasks)} shots", unit="shot")
-        rows = [f.result() for f in it]
-    times["round (robot + ball model)"] = time.perf_counter() - t3
+        return [f.result() for f in it]
 
-    # 5. a few shots again in exudyn
-    t4 = time.perf_counter()
-    if validate_shots > 0:
-        from ..robots.control import place_robot
-        from ..sim.exudyn_shot import simulate_shot_exudyn
 
-        for row in [r for r in rows if r["method"] == learners[0] and r["hit"]][:validate_shots]:
-            ball = np.array([row["ball_x"], row["ball_y"]])
-            ex_shot = simulate_shot_exudyn(fld, ball, hole=[row["hole_x"], row["hole_y"]], arm={
-                "robot": place_robot(robot, ball, fld), "motion": motion,
-                "alpha": row["alpha"], "kappa": row["kappa"]})
-            row["sunk_exudyn"] = bool(ex_shot.sunk)
-        times["exudyn validation"] = time.perf_counter() - t4
+def _check_in_exudyn(cfg: PlayConfig, fld, motion, tasks: list[dict], rows: list[dict]) -> None:
+    """Step 5: the first learner's first hits again in exudyn (``sunk_exudyn`` of their rows)."""
+    from ..robots.control import place_robot
+    from ..sim.shot import simulate_shot_exudyn
 
-    # outputs
-    atomic_csv(os.path.join(out, "shots.csv"), SHOT_COLUMNS,
-               ([r[c] for c in SHOT_COLUMNS] for r in rows))
-    rates = {m: float(np.mean([r["sunk"] for r in rows if r["method"] == m])) for m in learners}
+    checked = [(t, r) for t, r in zip(tasks, rows) if r["method"] == cfg.learners[0] and r["hit"]]
+    for task, row in checked[:cfg.validate_shots]:
+        ball = np.asarray(task["ball"])
+        ex_shot = simulate_shot_exudyn(fld, ball, hole=task["hole"], arm={
+            "robot": place_robot(cfg.robot, ball, fld), "motion": motion,
+            "alpha": task["alpha"], "kappa": task["kappa"]})
+        row["sunk_exudyn"] = bool(ex_shot.sunk)
+
+
+def _summary(cfg: PlayConfig, fld, rows: list[dict], n_situations: int, times: dict):
+    """Success per learner, agreement with exudyn and the time per stage, as text."""
+    rates = {m: float(np.mean([r["sunk"] for r in rows if r["method"] == m]))
+             for m in cfg.learners}
     checked = [r for r in rows if r["sunk_exudyn"] != ""]
-    lines = [f"played {len(balls)} situations on {fld.name} with the {robot}"]
-    lines += [f"  {m}: {rates[m]:.0%} sunk" for m in learners]
+    lines = [f"played {n_situations} situations on {fld.name} with the {cfg.robot}"]
+    lines += [f"  {m}: {rates[m]:.0%} sunk" for m in cfg.learners]
     if checked:
         agree = np.mean([r["sunk"] == r["sunk_exudyn"] for r in checked])
         lines.append(f"  exudyn agreed with the ball model on {agree:.0%} of "
                      f"{len(checked)} checked shots")
     lines.append("time per stage:")
     lines += [f"  {k}: {v:.1f} s" for k, v in times.items()]
-    text = "\n".join(lines) + "\n"
-    atomic_text(os.path.join(out, "summary.txt"), text)
-    _figures(fld, motion, data, fitted, rows, learners, out)
-    print(text, end="")
-    print(f"wrote {os.path.join(out, 'shots.csv')}, summary.txt, figures and models/ in {out}")
+    return rates, "\n".join(lines) + "\n"
+
+
+def play(config: PlayConfig | None = None, **overrides) -> dict:
+    """Run the main job (module docstring) and write its outputs into ``config.out``.
+
+    Parameters
+    ----------
+    config : PlayConfig, optional
+        The settings (default: ``PlayConfig()``).
+    **overrides
+        Settings replaced in ``config``, e.g. ``play(robot="katana", quick=True)``.
+
+    Returns
+    -------
+    dict
+        ``success`` (fraction sunk per learner), ``times`` (seconds per stage) and ``rows``
+        (the rows of ``shots.csv``, with the ball paths).
+    """
+    from ..minigolf.fields import load_field
+    from ..robots.models import load_robot, robot_names
+
+    cfg = with_overrides(PlayConfig, config, overrides).effective()
+    if cfg.robot not in robot_names() and not str(cfg.robot).endswith(".urdf"):
+        raise ValueError(f"unknown robot {cfg.robot!r}; known: {', '.join(robot_names())}")
+    fld = load_field(cfg.field)
+    load_robot(cfg.robot)  # a robot that does not load fails before any work
+    os.makedirs(os.path.join(cfg.out, "models"), exist_ok=True)
+    times: dict[str, float] = {}
+    rng = np.random.default_rng(cfg.seed)
+    motion_dir = os.path.join(cfg.out, "models", "motion")
+    motion, data = (_reuse_models(cfg.models, fld) if cfg.models
+                    else _learn_and_teach(cfg, fld, times))
+    motion.save(motion_dir)
+    data.save(os.path.join(cfg.out, "models", f"dataset_{fld.name}.npz"))
+    t2 = time.perf_counter()
+    fitted = _fit_learners(data, cfg.learners)
+    times["hitting-parameter models"] = time.perf_counter() - t2
+    t3 = time.perf_counter()
+    balls, holes = _situations(fld, data, cfg.shots, rng)
+    tasks = _round_tasks(cfg, fld, data, fitted, balls, holes, motion_dir)
+    rows = _play_round(cfg, tasks)
+    times["round (robot + ball model)"] = time.perf_counter() - t3
+    if cfg.validate_shots > 0:
+        t4 = time.perf_counter()
+        _check_in_exudyn(cfg, fld, motion, tasks, rows)
+        times["exudyn validation"] = time.perf_counter() - t4
+    atomic_csv(os.path.join(cfg.out, "shots.csv"), SHOT_COLUMNS,
+               ([r[c] for c in SHOT_COLUMNS] for r in rows))
+    rates, text = _summary(cfg, fld, rows, len(balls), times)
+    atomic_text(os.path.join(cfg.out, "summary.txt"), text)
+    _figures(fld, motion, data, fitted, rows, cfg.learners, cfg.out)
+    _LOG.info("%s", text.rstrip("\n"))
+    _LOG.info("wrote %s, summary.txt, figures and models/ in %s",
+              os.path.join(cfg.out, "shots.csv"), cfg.out)
     return {"success": rates, "times": times, "rows": rows}
 
 
@@ -227,8 +339,8 @@ def _figures(fld, motion, data, fitted, rows, learners, out) -> None:
         rs = [r for r in rows if r["method"] == m]
         plot_field(fld, ax=ax, paths=[r["path"] for r in rs if "path" in r],
                    sunk=[r["sunk"] for r in rs if "path" in r],
-                   ball=np.array([[r["ball_x"], r["ball_y"]] for r in rs]),
-                   hole=np.array([[r["hole_x"], r["hole_y"]] for r in rs]))
+                   ball=np.array([[r["ball_x_m"], r["ball_y_m"]] for r in rs]),
+                   hole=np.array([[r["hole_x_m"], r["hole_y_m"]] for r in rs]))
         ax.set_title(f"{m}: {np.mean([r['sunk'] for r in rs]):.0%} sunk (green: sunk, red: "
                      f"missed)", fontsize=9)
     save_figure(fig, os.path.join(out, "shots.png"))

@@ -1,9 +1,16 @@
 """``seds-casadi table1``: the protocol of :mod:`seds_casadi.minigolf.table1` run end to end,
-with Fig. 10 and 11."""
+with Fig. 10 and 11.
+
+Settings are a :class:`Table1Config`; progress and the table go to the ``logging`` logger of
+this module (the command line prints them).
+"""
 
 from __future__ import annotations
 
+import logging
 import os
+import time
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -17,8 +24,62 @@ from ..minigolf.table1 import (
     write_table1_csv,
 )
 from ..minigolf.teacher import HittingDataset
+from ._config import names_tuple, whole_number, with_overrides
 
-__all__ = ["table1_command", "fig10", "fig11"]
+__all__ = ["table1_command", "Table1Config", "fig10", "fig11"]
+
+_LOG = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class Table1Config:
+    """Settings of :func:`table1_command` (the options of ``seds-casadi table1``).
+
+    Attributes
+    ----------
+    fields : tuple of str
+        Field names or ``.json`` field files.
+    repetitions : int
+        Repetitions of the protocol (at least 1).
+    seed : int
+    out : str
+        Output folder.
+    workers : int
+        Local worker processes for the repetitions.
+    dask : str or None
+        Address of a Dask scheduler (overrides ``workers``).
+    quick : bool
+        At most 3 repetitions and a coarser teacher search: a check in about a minute, not the
+        paper's numbers.
+    demos : str or None
+        Hitting demonstrations (``.npz``/``.csv``); None: the shipped putts.
+    figures : bool
+        Write Fig. 10 and 11.
+    progress : bool
+        Progress bars (on stderr).
+    """
+
+    fields: tuple[str, ...] = TABLE1_FIELDS
+    repetitions: int = 100
+    seed: int = 0
+    out: str = "table1_out"
+    workers: int = 1
+    dask: str | None = None
+    quick: bool = False
+    demos: str | None = None
+    figures: bool = True
+    progress: bool = True
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "fields", names_tuple("field", self.fields))
+        object.__setattr__(self, "repetitions",
+                           whole_number("repetitions", self.repetitions, 1))
+        object.__setattr__(self, "workers", whole_number("workers", self.workers, 1))
+        object.__setattr__(self, "seed", whole_number("seed", self.seed, 0))
+
+    def effective(self) -> Table1Config:
+        """The settings actually run: ``quick`` caps the repetitions at 3."""
+        return replace(self, repetitions=min(self.repetitions, 3)) if self.quick else self
 
 
 def fig10(field_name: str, ds: HittingDataset, n_train: int = 8, ax_row=None):
@@ -44,72 +105,94 @@ def fig11(ds: HittingDataset, n_components: int = 3, ax_row=None):
     return plot_joint_gmm(m, ds.outputs, ax_row=ax_row)
 
 
-def table1_command(fields=TABLE1_FIELDS, repetitions: int = 100, seed: int = 0,
-                   out: str = "table1_out", workers: int = 1, dask: str | None = None,
-                   quick: bool = False, demos: str | None = None, figures: bool = True,
-                   progress: bool = True) -> list[Table1Row]:
-    """``seds-casadi table1``: learn the hitting motion, collect the teacher's data sets, run
-    the protocol, print the table beside the paper's and write ``table1.csv``, the data sets,
-    and Fig. 10 and 11 into ``out``.
-
-    ``quick``: 3 repetitions and a coarser teacher search (a check that runs in about a
-    minute, not the paper's numbers).
-    """
-    import time
-
+def _stroke(cfg: Table1Config):
+    """The hitting motion's default hit, learned from the demonstrations."""
     from ..core.demonstrations import load_demonstrations
-    from ..minigolf.fields import load_field
-    from ..minigolf.teacher import Stroke, collect_dataset
+    from ..minigolf.teacher import Stroke
     from ..motion.hitting import HittingMotion
     from ..motion.putting_demos import load_hitting_demos
-    from .executors import open_executor
-    from .plotting import _plt, save_figure
 
-    if quick:
-        repetitions = min(int(repetitions), 3)
-    fields = list(fields)
-    loaded = [load_field(f) for f in fields]  # bad names fail before any work
-    os.makedirs(os.path.join(out, "datasets"), exist_ok=True)
     t0 = time.perf_counter()
-    d = load_demonstrations(demos) if demos else load_hitting_demos()
+    d = load_demonstrations(cfg.demos) if cfg.demos else load_hitting_demos()
     motion = HittingMotion.fit(d, n_components=3)
     stroke = Stroke.from_motion(motion)
-    print(f"hitting motion: v* = {stroke.speed:.3f} m/s, psi* = "
-          f"{np.array2string(stroke.direction, precision=3)} "
-          f"({time.perf_counter() - t0:.1f} s)", flush=True)
-    teacher_kw = {"resolution": (81, 26)} if quick else {}
+    _LOG.info("hitting motion: v* = %.3f m/s, psi* = %s (%.1f s)", stroke.speed,
+              np.array2string(stroke.direction, precision=3), time.perf_counter() - t0)
+    return stroke
+
+
+def _teach(cfg: Table1Config, fields: list, stroke) -> dict:
+    """The teacher's data set for each field, saved in ``out/datasets``."""
+    from ..minigolf.teacher import collect_dataset
+
+    teacher_kw = {"resolution": (81, 26)} if cfg.quick else {}
     datasets = {}
-    for f in loaded:
+    for f in fields:
         t1 = time.perf_counter()
-        ds = collect_dataset(f, stroke, progress=progress, **teacher_kw)
-        ds.save(os.path.join(out, "datasets", f"{f.name}.npz"))
+        ds = collect_dataset(f, stroke, progress=cfg.progress, **teacher_kw)
+        ds.save(os.path.join(cfg.out, "datasets", f"{f.name}.npz"))
         fixed = f", kappa {ds.kappa[0]:.3f}" if ds.strategy == "fixed_speed" else ""
-        print(f"teacher on {f.name}: {len(ds)} good shots ({ds.strategy}{fixed}; "
-              f"{ds.dropped} situations without one; {time.perf_counter() - t1:.1f} s)",
-              flush=True)
+        _LOG.info("teacher on %s: %d good shots (%s%s; %d situations without one; %.1f s)",
+                  f.name, len(ds), ds.strategy, fixed, ds.dropped, time.perf_counter() - t1)
         datasets[f.name] = (f, ds)
+    return datasets
+
+
+def _figures(datasets: dict, out: str) -> None:
+    """Fig. 10 on a one-output data set (the double hill's if there), Fig. 11 on a two-output
+    one."""
+    from .plotting import _plt, save_figure
+
+    plt = _plt()
+    one = [(n, ds) for n, (_, ds) in datasets.items() if ds.strategy == "fixed_speed"]
+    two = [ds for _, ds in datasets.values() if ds.strategy == "minimal_speed"]
+    if one:
+        name, ds = next(((n, d) for n, d in one if n == "double_hill"), one[0])
+        fig, axs = plt.subplots(1, 2, figsize=(10, 3.6), sharey=True)
+        fig10(name, ds, ax_row=axs)
+        save_figure(fig, os.path.join(out, "fig10_gpr_gmr.png"))
+    if two:
+        fig = plt.figure(figsize=(10.6, 3.8))
+        axs = [fig.add_subplot(1, 4, i + 1) for i in range(4)]
+        fig11(two[0], ax_row=axs)
+        save_figure(fig, os.path.join(out, "fig11_joint_gmm.png"))
+
+
+def table1_command(config: Table1Config | None = None, **overrides) -> list[Table1Row]:
+    """``seds-casadi table1``: learn the hitting motion, collect the teacher's data sets, run
+    the protocol, log the table beside the paper's and write ``table1.csv``,
+    ``table1_repetitions.csv``, ``table1.txt``, the data sets and Fig. 10 and 11 into
+    ``config.out``.
+
+    Parameters
+    ----------
+    config : Table1Config, optional
+        The settings (default: ``Table1Config()``).
+    **overrides
+        Settings replaced in ``config``, e.g. ``table1_command(fields=["arctan"], quick=True)``.
+
+    Returns
+    -------
+    list of Table1Row
+        The means over the repetitions.
+    """
+    from ..minigolf.fields import load_field
+    from .executors import open_executor
+
+    cfg = with_overrides(Table1Config, config, overrides).effective()
+    loaded = [load_field(f) for f in cfg.fields]  # bad names fail before any work
+    os.makedirs(os.path.join(cfg.out, "datasets"), exist_ok=True)
+    datasets = _teach(cfg, loaded, _stroke(cfg))
     t2 = time.perf_counter()
-    with open_executor(workers, dask) as ex:
-        means, runs = run_table1(datasets, repetitions, seed, ex, progress)
+    with open_executor(cfg.workers, cfg.dask) as ex:
+        means, runs = run_table1(datasets, cfg.repetitions, cfg.seed, ex, cfg.progress)
     text = format_table1(means)
-    print(text)
-    print(f"{repetitions} repetitions in {time.perf_counter() - t2:.1f} s")
-    write_table1_csv(means, os.path.join(out, "table1.csv"))
-    write_table1_csv(runs, os.path.join(out, "table1_repetitions.csv"))
-    atomic_text(os.path.join(out, "table1.txt"), text)
-    if figures:
-        plt = _plt()
-        one = [(n, ds) for n, (_, ds) in datasets.items() if ds.strategy == "fixed_speed"]
-        two = [ds for _, ds in datasets.values() if ds.strategy == "minimal_speed"]
-        if one:
-            name, ds = next(((n, d) for n, d in one if n == "double_hill"), one[0])
-            fig, axs = plt.subplots(1, 2, figsize=(10, 3.6), sharey=True)
-            fig10(name, ds, ax_row=axs)
-            save_figure(fig, os.path.join(out, "fig10_gpr_gmr.png"))
-        if two:
-            fig = plt.figure(figsize=(10.6, 3.8))
-            axs = [fig.add_subplot(1, 4, i + 1) for i in range(4)]
-            fig11(two[0], ax_row=axs)
-            save_figure(fig, os.path.join(out, "fig11_joint_gmm.png"))
-    print(f"wrote {os.path.join(out, 'table1.csv')} and figures in {out}")
+    _LOG.info("%s", text)
+    _LOG.info("%d repetitions in %.1f s", cfg.repetitions, time.perf_counter() - t2)
+    write_table1_csv(means, os.path.join(cfg.out, "table1.csv"))
+    write_table1_csv(runs, os.path.join(cfg.out, "table1_repetitions.csv"))
+    atomic_text(os.path.join(cfg.out, "table1.txt"), text)
+    if cfg.figures:
+        _figures(datasets, cfg.out)
+    _LOG.info("wrote %s and figures in %s", os.path.join(cfg.out, "table1.csv"), cfg.out)
     return means

@@ -1,121 +1,142 @@
 """``seds-casadi validate``: shots chosen by the learned hitting-parameter model, executed on a
-robot in Pinocchio and checked again in exudyn (:mod:`seds_casadi.sim`)."""
+robot in Pinocchio and checked again in exudyn (:mod:`seds_casadi.sim`).
+
+Settings are a :class:`ValidateConfig`; progress goes to the ``logging`` logger of this module
+(the command line prints it).
+"""
 
 from __future__ import annotations
 
+import logging
 import os
+import time
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..minigolf.ball import BALL_RADIUS
-from ..sim.exudyn_shot import simulate_shot_exudyn
+from ..sim.shot import simulate_shot_exudyn
+from ._config import whole_number, with_overrides
 
-__all__ = ["validate", "VALIDATION_COLUMNS"]
+__all__ = ["validate", "ValidateConfig", "VALIDATION_COLUMNS"]
 
+_LOG = logging.getLogger(__name__)
 
+#: columns of ``validation.csv``; a unit ends the name (deg, m), impact_speed_error is relative
+#: to the fast model's launch speed
 VALIDATION_COLUMNS = ("field", "robot", "shot", "sunk_fast", "sunk_exudyn",
                       "impact_direction_error_deg", "impact_speed_error", "final_distance_m")
+_NOT_COMPARED = {"impact_direction_error_deg": np.nan, "impact_speed_error": np.nan,
+                 "final_distance_m": np.nan}
 
 
-def validate(robot_name: str = "wam", field_name: str = "flat", shots: int = 10,
-             out: str = "validate_out", seed: int = 0, progress: bool = True) -> list[dict]:
-    """``seds-casadi validate``: shots chosen by the learned hitting-parameter model (GPR on the
-    teacher's data set for the field), executed by the robot's 500 Hz controller on Pinocchio,
-    then played on the fast ball model and in exudyn; writes ``validation.csv``,
-    ``report.txt`` and ``validation.png`` into ``out``.
+@dataclass(frozen=True)
+class ValidateConfig:
+    """Settings of :func:`validate` (the options of ``seds-casadi validate``).
 
-    Returns the rows of ``validation.csv``.
+    Attributes
+    ----------
+    robot : str
+        A robot name or a ``.urdf`` file.
+    field : str
+        A field name or a ``.json`` field file.
+    shots : int
+        Shots to play (at least 1).
+    out : str
+        Output folder.
+    seed : int
+    progress : bool
+        A progress bar (on stderr).
     """
-    import time
 
-    from ..core._io import atomic_csv, atomic_text
-    from ..minigolf.ball import impact, simulate_shots
-    from ..minigolf.fields import load_field
+    robot: str = "wam"
+    field: str = "flat"
+    shots: int = 10
+    out: str = "validate_out"
+    seed: int = 0
+    progress: bool = True
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "shots", whole_number("shots", self.shots, 1))
+        object.__setattr__(self, "seed", whole_number("seed", self.seed, 0))
+
+
+def _learn(fld):
+    """The hitting motion, the teacher's data set for the field and GPR fitted on it."""
     from ..minigolf.parameters import make_model
     from ..minigolf.teacher import Stroke, collect_dataset
     from ..motion.hitting import HittingMotion
     from ..motion.putting_demos import load_hitting_demos
-    from ..robots.control import place_robot, simulate_swing
 
-    if int(shots) < 1:
-        raise ValueError(f"shots must be at least 1, got {shots}")
-    fld = load_field(field_name)
-    os.makedirs(out, exist_ok=True)
-    rng = np.random.default_rng(seed)
     t0 = time.perf_counter()
     motion = HittingMotion.fit(load_hitting_demos(), n_components=3)
-    stroke = Stroke.from_motion(motion)
-    data = collect_dataset(fld, stroke, resolution=(121, 41))
+    data = collect_dataset(fld, Stroke.from_motion(motion), resolution=(121, 41))
     model = make_model("gpr").fit(data.situations, data.outputs)
-    print(f"hitting motion, teacher ({len(data)} good shots) and GPR: "
-          f"{time.perf_counter() - t0:.1f} s", flush=True)
+    _LOG.info("hitting motion, teacher (%d good shots) and GPR: %.1f s", len(data),
+              time.perf_counter() - t0)
+    return motion, data, model
 
-    def placed(ball_xy):
-        # the robot stands at its default place beside each ball, on the surface
-        return place_robot(robot_name, ball_xy, fld)
 
+def _situation(data, rng):
+    """A random hole in the range of the data set's holes, and a ball in the box of its balls
+    (or its one ball)."""
     lo, hi = data.hole.min(axis=0), data.hole.max(axis=0)
-    rows, paths = [], []
-    it = range(int(shots))
-    if progress:
-        from tqdm.auto import tqdm
+    hole = lo + rng.uniform(size=2) * (hi - lo)
+    ball = data.ball[0] if np.ptp(data.ball, axis=0).max() == 0 else \
+        data.ball.min(axis=0) + rng.uniform(size=2) * np.ptp(data.ball, axis=0)
+    return ball, hole
 
-        it = tqdm(it, desc=f"validate {robot_name} on {fld.name}", unit="shot")
-    wall, simulated = 0.0, 0.0
-    for i in it:
-        hole = lo + rng.uniform(size=2) * (hi - lo)
-        ball = data.ball[0] if np.ptp(data.ball, axis=0).max() == 0 else \
-            data.ball.min(axis=0) + rng.uniform(size=2) * np.ptp(data.ball, axis=0)
-        pred = model.predict((hole - ball)[None])[0]
-        alpha = np.deg2rad(pred[0])
-        kappa = float(pred[1]) if len(pred) > 1 else float(data.kappa[0])
-        z = float(fld.surface.height(ball[None])[0]) + BALL_RADIUS
-        swing = simulate_swing(placed(ball), motion, np.array([ball[0], ball[1], z]), alpha,
-                               kappa)
-        row = {"field": fld.name, "robot": robot_name, "shot": i}
-        if not swing.hit:
-            row.update(sunk_fast=False, sunk_exudyn=False, impact_direction_error_deg=np.nan,
-                       impact_speed_error=np.nan, final_distance_m=np.nan)
-            rows.append(row)
-            paths.append(None)
-            continue
-        vc = swing.hit_velocity
-        # the face as the robot holds it (five joints cannot keep it square) and the arm's
-        # effective mass at the face
-        launch = impact(vc[None], face_normal=swing.face_normal[None],
-                        club_mass=swing.effective_mass)
-        fast = simulate_shots(fld, ball[None], launch, hole=hole, engine="numpy",
-                              record_paths=True)
-        # the same swing in exudyn: the arm as a kinematic tree under the same controller,
-        # the ball struck by the club face's contact sphere
-        ex = simulate_shot_exudyn(fld, ball, hole=hole, arm={
-            "robot": placed(ball), "motion": motion, "alpha": alpha, "kappa": kappa})
-        if not ex.hit:
-            row.update(sunk_fast=bool(fast.sunk[0]), sunk_exudyn=False,
-                       impact_direction_error_deg=np.nan, impact_speed_error=np.nan,
-                       final_distance_m=np.nan)
-            rows.append(row)
-            paths.append(None)
-            continue
-        wall += ex.wall_time
-        simulated += ex.simulated_time
-        a, b2 = ex.launch_velocity, launch[0]
-        cosang = a @ b2 / max(np.linalg.norm(a) * np.linalg.norm(b2), 1e-12)
-        row.update(sunk_fast=bool(fast.sunk[0]), sunk_exudyn=bool(ex.sunk),
-                   impact_direction_error_deg=float(np.degrees(np.arccos(np.clip(cosang, -1, 1)))),
-                   impact_speed_error=float(abs(np.linalg.norm(a) / np.linalg.norm(b2) - 1)),
-                   final_distance_m=float(np.linalg.norm(ex.final_position
-                                                         - fast.final_position[0])))
-        rows.append(row)
-        paths.append((fast.paths[0], ex.path[:, 1:], hole, ball, swing, ex))
-    atomic_csv(os.path.join(out, "validation.csv"), VALIDATION_COLUMNS,
-               ([r[c] for c in VALIDATION_COLUMNS] for r in rows))
+
+def _shot(cfg: ValidateConfig, fld, motion, model, data, ball, hole, i: int):
+    """One shot on both models: its row of ``validation.csv``, and what the figure needs (the
+    paths, the swing and the exudyn shot; None without a hit in exudyn)."""
+    from ..minigolf.ball import impact, simulate_shots
+    from ..robots.control import place_robot, simulate_swing
+
+    pred = model.predict((hole - ball)[None])[0]
+    alpha = np.deg2rad(pred[0])
+    kappa = float(pred[1]) if len(pred) > 1 else float(data.kappa[0])
+    z = float(fld.surface.height(ball[None])[0]) + BALL_RADIUS
+    # the robot stands at its default place beside each ball, on the surface
+    swing = simulate_swing(place_robot(cfg.robot, ball, fld), motion,
+                           np.array([ball[0], ball[1], z]), alpha, kappa)
+    row = {"field": fld.name, "robot": cfg.robot, "shot": i}
+    if not swing.hit:
+        row.update(sunk_fast=False, sunk_exudyn=False, **_NOT_COMPARED)
+        return row, None
+    # the face as the robot holds it (five joints cannot keep it square) and the arm's
+    # effective mass at the face
+    launch = impact(swing.hit_velocity[None], face_normal=swing.face_normal[None],
+                    club_mass=swing.effective_mass)
+    fast = simulate_shots(fld, ball[None], launch, hole=hole, engine="numpy", record_paths=True)
+    # the same swing in exudyn: the arm as a kinematic tree under the same controller, the
+    # ball struck by the club face's contact triangles
+    ex = simulate_shot_exudyn(fld, ball, hole=hole, arm={
+        "robot": place_robot(cfg.robot, ball, fld), "motion": motion, "alpha": alpha,
+        "kappa": kappa})
+    if not ex.hit:
+        row.update(sunk_fast=bool(fast.sunk[0]), sunk_exudyn=False, **_NOT_COMPARED)
+        return row, None
+    a, b2 = ex.launch_velocity, launch[0]
+    cosang = a @ b2 / max(np.linalg.norm(a) * np.linalg.norm(b2), 1e-12)
+    row.update(sunk_fast=bool(fast.sunk[0]), sunk_exudyn=bool(ex.sunk),
+               impact_direction_error_deg=float(np.degrees(np.arccos(np.clip(cosang, -1, 1)))),
+               impact_speed_error=float(abs(np.linalg.norm(a) / np.linalg.norm(b2) - 1)),
+               final_distance_m=float(np.linalg.norm(ex.final_position
+                                                     - fast.final_position[0])))
+    return row, (fast.paths[0], ex.path[:, 1:], hole, ball, swing, ex)
+
+
+def _report(cfg: ValidateConfig, fld, rows: list[dict], shots: list) -> str:
+    """The text of ``report.txt``: agreement of the sinks, the impact and final positions."""
     hit = [r for r in rows if np.isfinite(r["impact_speed_error"])]
     agree = np.mean([r["sunk_fast"] == r["sunk_exudyn"] for r in rows])
-    lines = [f"validation of {robot_name} on {fld.name}: {len(rows)} shots, {len(hit)} hit",
+    lines = [f"validation of {cfg.robot} on {fld.name}: {len(rows)} shots, {len(hit)} hit",
              f"sinks agree: {agree:.0%} (fast sank {sum(r['sunk_fast'] for r in rows)}, "
              f"exudyn sank {sum(r['sunk_exudyn'] for r in rows)})"]
     if hit:
+        wall = sum(s[5].wall_time for s in shots if s is not None)
+        simulated = sum(s[5].simulated_time for s in shots if s is not None)
         lines += [
             f"impact direction error: max {max(r['impact_direction_error_deg'] for r in hit):.2f}"
             f" deg (target 2)",
@@ -124,10 +145,52 @@ def validate(robot_name: str = "wam", field_name: str = "flat", shots: int = 10,
             f"final distance: median {np.median([r['final_distance_m'] for r in hit]):.3f} m, "
             f"max {max(r['final_distance_m'] for r in hit):.3f} m",
             f"exudyn speed: {simulated / max(wall, 1e-9):.2f} simulated s per wall s"]
-    text = "\n".join(lines) + "\n"
-    atomic_text(os.path.join(out, "report.txt"), text)
-    _report_figure(fld, paths, os.path.join(out, "validation.png"))
-    print(text, end="")
+    return "\n".join(lines) + "\n"
+
+
+def validate(config: ValidateConfig | None = None, **overrides) -> list[dict]:
+    """``seds-casadi validate``: shots chosen by the learned hitting-parameter model (GPR on the
+    teacher's data set for the field), executed by the robot's 500 Hz controller on Pinocchio,
+    then played on the fast ball model and in exudyn; writes ``validation.csv``,
+    ``report.txt`` and ``validation.png`` into ``config.out``.
+
+    Parameters
+    ----------
+    config : ValidateConfig, optional
+        The settings (default: ``ValidateConfig()``).
+    **overrides
+        Settings replaced in ``config``, e.g. ``validate(robot="katana", shots=3)``.
+
+    Returns
+    -------
+    list of dict
+        The rows of ``validation.csv`` (:data:`VALIDATION_COLUMNS`).
+    """
+    from ..core._io import atomic_csv, atomic_text
+    from ..minigolf.fields import load_field
+
+    cfg = with_overrides(ValidateConfig, config, overrides)
+    fld = load_field(cfg.field)
+    os.makedirs(cfg.out, exist_ok=True)
+    rng = np.random.default_rng(cfg.seed)
+    motion, data, model = _learn(fld)
+    it = range(cfg.shots)
+    if cfg.progress:
+        from tqdm.auto import tqdm
+
+        it = tqdm(it, desc=f"validate {cfg.robot} on {fld.name}", unit="shot")
+    rows, shots = [], []
+    for i in it:
+        ball, hole = _situation(data, rng)
+        row, shot = _shot(cfg, fld, motion, model, data, ball, hole, i)
+        rows.append(row)
+        shots.append(shot)
+    atomic_csv(os.path.join(cfg.out, "validation.csv"), VALIDATION_COLUMNS,
+               ([r[c] for c in VALIDATION_COLUMNS] for r in rows))
+    text = _report(cfg, fld, rows, shots)
+    atomic_text(os.path.join(cfg.out, "report.txt"), text)
+    _report_figure(fld, shots, os.path.join(cfg.out, "validation.png"))
+    _LOG.info("%s", text.rstrip("\n"))
     return rows
 
 
@@ -156,6 +219,3 @@ def _report_figure(fld, paths, path):
     a2.set_ylabel("club-head speed [m/s]")
     a2.set_title("club-head speed: Pinocchio swing (solid), exudyn arm (dotted)", fontsize=9)
     save_figure(fig, path)
-
-
-# ---------------------------------------------------------------------------- the arm in exudyn

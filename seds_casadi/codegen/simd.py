@@ -9,9 +9,9 @@ function's instruction list, so it computes exactly the same expression as the C
 (up to the compiler's floating-point contractions and the vector math library's exp/log, which
 are within a few ulp).
 
-Used by :class:`seds_casadi.minigolf.ball.BallKernel`; falls back to CasADi's kernel when there is no C
-compiler, the step uses an operation not translated here (e.g. an interpolant call), or the
-compiler fails.
+Used by :class:`seds_casadi.minigolf.ball_kernel.BallKernel`; falls back to CasADi's kernel when
+there is no C compiler, the step uses an operation not translated here (e.g. an interpolant
+call), or the compiler fails.
 """
 
 from __future__ import annotations
@@ -74,37 +74,55 @@ def simd_source(step: ca.Function, name: str, done_index: int | None = None,
     UnsupportedOperation
         If the step contains an operation not translated (function calls, for instance).
     """
+    _check_step(step, lookup)
+    body = _lookup_lines(lookup) if lookup else []
+    lines, used = _instruction_lines(step)
+    return _loop_source(step, name, block, done_index, body + lines, used)
+
+
+def _check_step(step: ca.Function, lookup: dict | None) -> None:
+    """The step must be an SX Function from one dense state to one of the same size (and the
+    looked-up values second, with ``lookup``)."""
     if not step.is_a("SXFunction"):
         raise UnsupportedOperation("the step must be an SX Function")
     n_in = 2 if lookup else 1
     if step.n_in() != n_in or step.n_out() != 1 or step.nnz_in(0) != step.nnz_out(0):
         raise UnsupportedOperation("the step must map one dense state to one of the same size"
                                    + (" (and take the looked-up values second)" if lookup else ""))
-    m = step.nnz_in(0)
+    if lookup and step.nnz_in(1) != int(lookup["channels"]):
+        raise UnsupportedOperation(f"the step's second input has {step.nnz_in(1)} entries, "
+                                   f"the table {int(lookup['channels'])} channels")
+
+
+def _lookup_lines(L: dict) -> list[str]:
+    """C statements that read ``a0``, ``a1``, ... by bilinear interpolation from the table
+    ``T`` at the state's grid coordinates (clamped to the grid's last cell, as CasADi)."""
+    c = int(L["channels"])
     body = []
-    if lookup:
-        L = lookup
-        c = int(L["channels"])
-        if step.nnz_in(1) != c:
-            raise UnsupportedOperation(f"the step's second input has {step.nnz_in(1)} entries, "
-                                       f"the table {c} channels")
-        for ax, (si, o, d, nn) in (("x", (L["ix"], L["x0"], L["dx"], L["nx"])),
-                                   ("y", (L["iy"], L["y0"], L["dy"], L["ny"]))):
-            body += [f"double g{ax} = (S[{int(si)} * stride + i] - {float(o)!r}) / {float(d)!r};",
-                     f"double c{ax} = floor(g{ax});",
-                     f"c{ax} = c{ax} < 0.0 ? 0.0 : (c{ax} > {int(nn) - 2}.0 ? "
-                     f"{int(nn) - 2}.0 : c{ax});",
-                     f"double f{ax} = g{ax} - c{ax};"]
-        nx = int(L["nx"])
-        body.append(f"int k00 = {c} * ((int)cx + {nx} * (int)cy);")
-        offs = {"00": "k00", "10": f"k00 + {c}", "01": f"k00 + {c * nx}",
-                "11": f"k00 + {c * (nx + 1)}"}
-        for j in range(c):
-            body.append(
-                f"double a{j} = (1.0 - fx) * (1.0 - fy) * T[{offs['00']} + {j}] "
-                f"+ fx * (1.0 - fy) * T[{offs['10']} + {j}] "
-                f"+ (1.0 - fx) * fy * T[{offs['01']} + {j}] + fx * fy * T[{offs['11']} + {j}];")
-    used = set()
+    for ax, (si, o, d, nn) in (("x", (L["ix"], L["x0"], L["dx"], L["nx"])),
+                               ("y", (L["iy"], L["y0"], L["dy"], L["ny"]))):
+        body += [f"double g{ax} = (S[{int(si)} * stride + i] - {float(o)!r}) / {float(d)!r};",
+                 f"double c{ax} = floor(g{ax});",
+                 f"c{ax} = c{ax} < 0.0 ? 0.0 : (c{ax} > {int(nn) - 2}.0 ? "
+                 f"{int(nn) - 2}.0 : c{ax});",
+                 f"double f{ax} = g{ax} - c{ax};"]
+    nx = int(L["nx"])
+    body.append(f"int k00 = {c} * ((int)cx + {nx} * (int)cy);")
+    offs = {"00": "k00", "10": f"k00 + {c}", "01": f"k00 + {c * nx}",
+            "11": f"k00 + {c * (nx + 1)}"}
+    for j in range(c):
+        body.append(
+            f"double a{j} = (1.0 - fx) * (1.0 - fy) * T[{offs['00']} + {j}] "
+            f"+ fx * (1.0 - fy) * T[{offs['10']} + {j}] "
+            f"+ (1.0 - fx) * fy * T[{offs['01']} + {j}] + fx * fy * T[{offs['11']} + {j}];")
+    return body
+
+
+def _instruction_lines(step: ca.Function) -> tuple[list[str], set[str]]:
+    """One C statement per instruction of the SX Function (work variables ``w``, outputs
+    ``o``), and the vector math functions they call."""
+    body: list[str] = []
+    used: set[str] = set()
     for k in range(step.n_instructions()):
         op = step.instruction_id(k)
         ins = step.instruction_input(k)
@@ -128,6 +146,14 @@ def simd_source(step: ca.Function, name: str, done_index: int | None = None,
             names = {getattr(ca, n): n for n in dir(ca) if n.startswith("OP_")}
             raise UnsupportedOperation(f"operation {names.get(op, op)} is not translated")
         used.update(f for f in _VECTOR_MATH if f + "(" in body[-1])
+    return body, used
+
+
+def _loop_source(step: ca.Function, name: str, block: int, done_index: int | None,
+                 body: list[str], used: set[str]) -> str:
+    """The C function: blocks of states, ``steps`` steps each in an ``omp simd`` loop over the
+    block, an early stop once the block is done (with ``done_index``)."""
+    m = step.nnz_in(0)
     decl_w = ", ".join(f"w{j}" for j in range(step.sz_w()))
     decl_o = ", ".join(f"o{j}" for j in range(m))
     stores = " ".join(f"S[{j} * stride + i] = o{j};" for j in range(m))

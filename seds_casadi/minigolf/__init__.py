@@ -1,6 +1,8 @@
-"""Minigolf: fields (shipped and the user's own JSON files), the ball model (rolling, skidding,
-walls, hole capture; numpy reference and compiled engines), the teacher that finds good shots,
-the hitting-parameter learners (GPR, GMR) and the protocol of the paper's Table 1. It imports
+"""Minigolf: fields (``fields``, shipped and the user's own JSON files; their ``surface``), the
+ball model (``ball``: rolling, skidding, walls, hole capture and the numpy reference;
+``ball_kernel``: the compiled engine), the hit (``stroke``), the teacher that finds good shots
+(``teacher``) and its data sets (``hitting_data``), the hitting-parameter learners
+(``parameters``: GPR, GMR) and the protocol of the paper's Table 1 (``table1``). It imports
 :mod:`seds_casadi.motion`, :mod:`seds_casadi.core` and :mod:`seds_casadi.codegen`.
 """
 

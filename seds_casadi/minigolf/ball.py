@@ -34,12 +34,13 @@ Integration: a fixed step (default 10 ms): velocity by explicit Euler, position 
 rule (exact for a constant deceleration), the hole test on the step's segment so that a fast
 ball cannot jump over it.
 
-Two engines share exactly these equations: ``"numpy"``, the readable reference (also records
-paths), and ``"compiled"``, the same step written in CasADi and run in C over many shots on two
-threads (:class:`BallKernel`; by default as a vectorised loop generated from the CasADi step,
-:mod:`seds_casadi.simd`), 17-20x faster on analytic fields. Surfaces whose exact evaluation is expensive
-("rough": hundreds of bumps; "heightmap": a spline) are read by the compiled engine from a table
-of derivatives on a 1 cm grid (:meth:`Surface.table`), interpolated linearly.
+Two engines share exactly these equations: ``"numpy"``, the readable reference here (also
+records paths), and ``"compiled"``, the same step written in CasADi and run in C over many shots
+on two threads (:class:`~seds_casadi.minigolf.ball_kernel.BallKernel`; by default as a vectorised
+loop generated from the CasADi step, :mod:`seds_casadi.codegen.simd`), 17-20x faster on analytic
+fields. Surfaces whose exact evaluation is expensive ("rough": hundreds of bumps; "heightmap": a
+spline) are read by the compiled engine from a table of derivatives on a 1 cm grid
+(:meth:`~seds_casadi.minigolf.surface.Surface.table`), interpolated linearly.
 """
 
 from __future__ import annotations
@@ -51,8 +52,10 @@ import numpy as np
 from ..motion.golf import BALL_MASS, BALL_RADIUS, G
 from .fields import Field
 
+# BallKernel and ball_kernel, the compiled engine, live in ball_kernel (which imports this
+# module) and can be imported from here too (module __getattr__ below)
 __all__ = ["BALL_MASS", "BALL_RADIUS", "G", "impact", "capture_speed", "simulate_shots",
-           "ShotResult", "BallKernel", "ball_kernel"]
+           "ShotResult"]
 
 MU_SLIDE = 0.2
 CLUB_MASS = 0.35
@@ -169,15 +172,7 @@ def simulate_shots(field: Field, ball_xy, launch_velocity, dt: float = 0.01,
     -------
     ShotResult
     """
-    if engine not in ("auto", "compiled", "numpy"):
-        raise ValueError(f"engine must be 'auto', 'compiled' or 'numpy', got {engine!r}")
-    if engine == "compiled" and record_paths:
-        raise ValueError("record_paths needs engine='numpy' (the compiled engine keeps no paths)")
-    if engine == "auto":
-        from ..codegen import compiler_available
-
-        engine = ("compiled" if (not record_paths and compiler_available()
-                                 and np.size(ball_xy) > 16) else "numpy")
+    engine = _choose_engine(engine, record_paths, ball_xy)
     P = field.check_situation(ball_xy).copy()
     U = np.atleast_2d(np.asarray(launch_velocity, dtype=float)).copy()
     if U.shape != P.shape:
@@ -191,92 +186,23 @@ def simulate_shots(field: Field, ball_xy, launch_velocity, dt: float = 0.01,
         raise ValueError("dt and max_time must be positive")
     Hh = _holes(field, hole, len(P))
     if engine == "compiled":
+        from .ball_kernel import ball_kernel
+
         return ball_kernel(field, dt).run(P, U, max_time, Hh)
-    n = len(P)
-    # slip velocity of the contact point: a struck ball has no spin, so it slips at its speed
-    S = U.copy()
-    mg = MU_SLIDE * G
-    active = np.ones(n, bool)
-    sunk = np.zeros(n, bool)
-    out = np.zeros(n, bool)
-    stopped = np.zeros(n, bool)
-    t_end = np.full(n, max_time)
-    walls = np.zeros(n, int)
-    paths = [[p.copy()] for p in P] if record_paths else None
-    b = field.bounds
-    r = BALL_RADIUS
-    R = field.hole_radius
-    steps = int(np.ceil(max_time / dt))
-    for k in range(steps):
-        idx = np.flatnonzero(active)
-        if idx.size == 0:
-            break
-        p, u, hole, s = P[idx], U[idx], Hh[idx], S[idx]
-        s_mag = np.linalg.norm(s, axis=1)
-        # sliding friction acts against the slip, which falls at (7/2) mu g (plus gravity)
-        slide = np.clip(s_mag / (3.5 * mg * dt), 0.0, 1.0)
-        rolling = slide <= 0
-        s_hat = s / np.maximum(s_mag, 1e-12)[:, None]
-        acc, full, unit, resist = _rolling_acc(field, p, u, slide)
-        speed = np.linalg.norm(u, axis=1)
-        # a ball at (nearly) rest stays there when resistance can hold it on the slope
-        slope_acc = np.linalg.norm(acc, axis=1)
-        rest = (speed < STOP_SPEED) & rolling & (slope_acc <= resist)
-        dv = dt * (acc - resist[:, None] * unit - (slide * mg)[:, None] * s_hat)
-        new_s = s + dt * (full - 3.5 * mg * s_hat)
-        new_s[(slide < 1) | (np.sum(new_s * s, axis=1) < 0)] = 0.0
-        resist = resist + slide * mg
-        # resistance cannot reverse the motion within a step
-        new_u = u + dv
-        reverse = (np.sum(new_u * u, axis=1) < 0) & (slope_acc <= resist)
-        new_u[reverse] = 0.0
-        new_u[rest] = 0.0
-        # trapezoid: exact for a constant deceleration; a ball that stops within the step
-        # travels u tau / 2 where tau is its stopping time
-        decel = np.maximum(-np.sum(dv * u, axis=1) / np.maximum(speed, 1e-12), 1e-12) / dt
-        tau = np.minimum(speed / decel, dt)
-        new_p = p + np.where(reverse, 0.5 * tau, 0.5 * dt)[:, None] * (u + new_u)
-        # hole: closest approach of the step's segment to the hole centre
-        seg = new_p - p
-        L2 = np.maximum(np.sum(seg * seg, axis=1), 1e-300)
-        lam = np.clip(np.sum((hole - p) * seg, axis=1) / L2, 0.0, 1.0)
-        closest = p + lam[:, None] * seg
-        off = np.linalg.norm(closest - hole, axis=1)
-        drop = (off < R) & (np.linalg.norm(new_u, axis=1) < capture_speed(off, R))
-        # boundary
-        if field.boundary == "walls":
-            for j, (lo, hi) in enumerate(((b[0], b[1]), (b[2], b[3]))):
-                low = new_p[:, j] < lo + r
-                high = new_p[:, j] > hi - r
-                new_p[low, j] = 2 * (lo + r) - new_p[low, j]
-                new_p[high, j] = 2 * (hi - r) - new_p[high, j]
-                hit = low | high
-                walls[idx[hit]] += 1
-                # the wall turns the velocity, not the spin: the contact point with the ground
-                # then slips at (1 + e) times the normal speed, and friction brings the ball
-                # back to rolling (a rolling ball comes off a wall slower than e v_n)
-                new_s[hit, j] -= (1.0 + field.wall_restitution) * new_u[hit, j]
-                new_u[hit, j] *= -field.wall_restitution
-            lost = np.zeros(len(idx), bool)
-        else:
-            lost = ((new_p[:, 0] < b[0]) | (new_p[:, 0] > b[1]) | (new_p[:, 1] < b[2])
-                    | (new_p[:, 1] > b[3]))
-        P[idx], U[idx], S[idx] = new_p, new_u, new_s
-        t = (k + 1) * dt
-        done_sunk = drop
-        done_out = lost & ~drop
-        done_stop = rest & ~drop & ~lost
-        sunk[idx[done_sunk]] = True
-        out[idx[done_out]] = True
-        stopped[idx[done_stop]] = True
-        fin = done_sunk | done_out | done_stop
-        t_end[idx[fin]] = t
-        active[idx[fin]] = False
-        if record_paths:
-            for i in idx:
-                paths[i].append(P[i].copy())
-    return ShotResult(sunk, out, stopped, P, t_end,
-                      [np.array(q) for q in paths] if record_paths else None, walls)
+    return _simulate_numpy(field, P, U, Hh, dt, max_time, record_paths)
+
+
+def _choose_engine(engine: str, record_paths: bool, ball_xy) -> str:
+    if engine not in ("auto", "compiled", "numpy"):
+        raise ValueError(f"engine must be 'auto', 'compiled' or 'numpy', got {engine!r}")
+    if engine == "compiled" and record_paths:
+        raise ValueError("record_paths needs engine='numpy' (the compiled engine keeps no paths)")
+    if engine == "auto":
+        from ..codegen import compiler_available
+
+        engine = ("compiled" if (not record_paths and compiler_available()
+                                 and np.size(ball_xy) > 16) else "numpy")
+    return engine
 
 
 def _holes(field: Field, hole, n: int) -> np.ndarray:
@@ -296,222 +222,119 @@ def _holes(field: Field, hole, n: int) -> np.ndarray:
     return H
 
 
-# ------------------------------------------------------------------ compiled engine
-_KERNELS: dict = {}
+# ------------------------------------------------------------------ numpy engine (the reference)
+def _simulate_numpy(field: Field, P: np.ndarray, U: np.ndarray, Hh: np.ndarray, dt: float,
+                    max_time: float, record_paths: bool) -> ShotResult:
+    """The numpy engine: steps every moving shot until all are done or the time is up; P and U
+    (n, 2) are advanced in place."""
+    n = len(P)
+    # slip velocity of the contact point: a struck ball has no spin, so it slips at its speed
+    S = U.copy()
+    active = np.ones(n, bool)
+    sunk = np.zeros(n, bool)
+    out = np.zeros(n, bool)
+    stopped = np.zeros(n, bool)
+    t_end = np.full(n, max_time)
+    walls = np.zeros(n, int)
+    paths = [[p.copy()] for p in P] if record_paths else None
+    steps = int(np.ceil(max_time / dt))
+    for k in range(steps):
+        idx = np.flatnonzero(active)
+        if idx.size == 0:
+            break
+        p, u, hole, s = P[idx], U[idx], Hh[idx], S[idx]
+        new_p, new_u, new_s, rest = _step(field, p, u, s, dt)
+        drop = _drops(p, new_p, new_u, hole, field.hole_radius)
+        lost, hits = _boundary(field, new_p, new_u, new_s)
+        walls[idx] += hits
+        P[idx], U[idx], S[idx] = new_p, new_u, new_s
+        t = (k + 1) * dt
+        done_sunk = drop
+        done_out = lost & ~drop
+        done_stop = rest & ~drop & ~lost
+        sunk[idx[done_sunk]] = True
+        out[idx[done_out]] = True
+        stopped[idx[done_stop]] = True
+        fin = done_sunk | done_out | done_stop
+        t_end[idx[fin]] = t
+        active[idx[fin]] = False
+        if record_paths:
+            for i in idx:
+                paths[i].append(P[i].copy())
+    return ShotResult(sunk, out, stopped, P, t_end,
+                      [np.array(q) for q in paths] if record_paths else None, walls)
 
 
-def ball_kernel(field: Field, dt: float = 0.01) -> BallKernel:
-    """The compiled ball model of ``field`` (built once per field specification and step)."""
-    import json
+def _step(field: Field, p, u, s, dt: float):
+    """One step of the shots at p with velocities u and slips s, each (m, 2): the new
+    position, velocity and slip (before the boundary), and which balls are at rest."""
+    mg = MU_SLIDE * G
+    s_mag = np.linalg.norm(s, axis=1)
+    # sliding friction acts against the slip, which falls at (7/2) mu g (plus gravity)
+    slide = np.clip(s_mag / (3.5 * mg * dt), 0.0, 1.0)
+    rolling = slide <= 0
+    s_hat = s / np.maximum(s_mag, 1e-12)[:, None]
+    acc, full, unit, resist = _rolling_acc(field, p, u, slide)
+    speed = np.linalg.norm(u, axis=1)
+    # a ball at (nearly) rest stays there when resistance can hold it on the slope
+    slope_acc = np.linalg.norm(acc, axis=1)
+    rest = (speed < STOP_SPEED) & rolling & (slope_acc <= resist)
+    dv = dt * (acc - resist[:, None] * unit - (slide * mg)[:, None] * s_hat)
+    new_s = s + dt * (full - 3.5 * mg * s_hat)
+    new_s[(slide < 1) | (np.sum(new_s * s, axis=1) < 0)] = 0.0
+    resist = resist + slide * mg
+    # resistance cannot reverse the motion within a step
+    new_u = u + dv
+    reverse = (np.sum(new_u * u, axis=1) < 0) & (slope_acc <= resist)
+    new_u[reverse] = 0.0
+    new_u[rest] = 0.0
+    # trapezoid: exact for a constant deceleration; a ball that stops within the step
+    # travels u tau / 2 where tau is its stopping time
+    decel = np.maximum(-np.sum(dv * u, axis=1) / np.maximum(speed, 1e-12), 1e-12) / dt
+    tau = np.minimum(speed / decel, dt)
+    new_p = p + np.where(reverse, 0.5 * tau, 0.5 * dt)[:, None] * (u + new_u)
+    return new_p, new_u, new_s, rest
 
-    key = (json.dumps(field.spec, sort_keys=True, default=str), field.name, float(dt),
-           tuple(field.bounds), field.hole_radius, field.rolling_resistance)
-    k = _KERNELS.get(key)
-    if k is None:
-        k = _KERNELS[key] = BallKernel(field, dt)
-    return k
+
+def _drops(p, new_p, new_u, hole, R: float) -> np.ndarray:
+    """Whether each ball drops into its hole during the step from p to new_p: the closest
+    approach of the step's segment to the hole's centre, and the capture speed there."""
+    seg = new_p - p
+    L2 = np.maximum(np.sum(seg * seg, axis=1), 1e-300)
+    lam = np.clip(np.sum((hole - p) * seg, axis=1) / L2, 0.0, 1.0)
+    closest = p + lam[:, None] * seg
+    off = np.linalg.norm(closest - hole, axis=1)
+    return (off < R) & (np.linalg.norm(new_u, axis=1) < capture_speed(off, R))
 
 
-class BallKernel:
-    """The ball model's step in CasADi, run in compiled C over many shots on two threads. Same
-    equations as the numpy engine (module docstring).
+def _boundary(field: Field, new_p, new_u, new_s) -> tuple[np.ndarray, np.ndarray]:
+    """Walls reflect the balls (new_p, new_u, new_s changed in place), edges lose them:
+    returns (lost, number of wall contacts in this step) per ball."""
+    b, r = field.bounds, BALL_RADIUS
+    hits = np.zeros(len(new_p), int)
+    if field.boundary != "walls":
+        lost = ((new_p[:, 0] < b[0]) | (new_p[:, 0] > b[1]) | (new_p[:, 1] < b[2])
+                | (new_p[:, 1] > b[3]))
+        return lost, hits
+    for j, (lo, hi) in enumerate(((b[0], b[1]), (b[2], b[3]))):
+        low = new_p[:, j] < lo + r
+        high = new_p[:, j] > hi - r
+        new_p[low, j] = 2 * (lo + r) - new_p[low, j]
+        new_p[high, j] = 2 * (hi - r) - new_p[high, j]
+        hit = low | high
+        hits += hit
+        # the wall turns the velocity, not the spin: the contact point with the ground then
+        # slips at (1 + e) times the normal speed, and friction brings the ball back to
+        # rolling (a rolling ball comes off a wall slower than e v_n)
+        new_s[hit, j] -= (1.0 + field.wall_restitution) * new_u[hit, j]
+        new_u[hit, j] *= -field.wall_restitution
+    return np.zeros(len(new_p), bool), hits
 
-    Two backends run the same CasADi SX step: ``"simd"`` translates it into a C loop over
-    blocks of 64 shots that the compiler vectorises (AVX2: four shots per instruction) and that
-    stops a block once all its shots are finished (:mod:`seds_casadi.simd`); ``"casadi"`` loops
-    it ``steps_per_call`` times in CasADi's generated C and maps that over batches of shots
-    (used when the step cannot be translated, e.g. a tabulated surface's interpolant call, or
-    no compiler works). ``"auto"`` picks simd when it can.
 
-    The state of a shot is (x, y, u_x, u_y, slip_x, slip_y, status, time, hole x, hole y, wall
-    contacts) with status 0 while moving, 1 sunk, 2 out, 3 stopped; finished shots are frozen.
-    Between calls the finished shots are dropped, so a batch costs what its longest shot needs.
+def __getattr__(name: str):
+    # the compiled engine lives in ball_kernel (which imports this module's constants)
+    if name in ("BallKernel", "ball_kernel"):
+        from . import ball_kernel as _kernel_module
 
-    Parameters
-    ----------
-    field : Field
-    dt : float
-        Step [s].
-    steps_per_call : int
-        Steps per compiled call (1 s of play at the default step).
-    batches : (int, int)
-        Shots per compiled call: large batches for the bulk of the shots, small ones for the
-        rest (so that 30 shots do not cost a large batch). CasADi backend.
-    backend : {"auto", "simd", "casadi"}
-    """
-
-    def __init__(self, field: Field, dt: float = 0.01, steps_per_call: int = 100,
-                 batches: tuple[int, int] = (1024, 32), backend: str = "auto") -> None:
-        import casadi as ca
-
-        if not (np.isfinite(dt) and dt > 0):
-            raise ValueError(f"dt must be positive, got {dt}")
-        if backend not in ("auto", "simd", "casadi"):
-            raise ValueError(f"backend must be 'auto', 'simd' or 'casadi', got {backend!r}")
-        self.field, self.dt = field, float(dt)
-        self.steps_per_call = int(steps_per_call)
-        self.batches = (int(batches[0]), int(batches[1]))
-        self._simd = None
-        self.simd_error = None
-        if backend in ("auto", "simd"):
-            from ..codegen.simd import SimdLoop, UnsupportedOperation
-
-            try:
-                if field.surface.tabulated:
-                    step, lookup, table = self._step(ca, tabulated_input=True)
-                else:
-                    step, lookup, table = self._step(ca), None, None
-                self._simd = SimdLoop(step, "ball_steps", done_index=6, lookup=lookup,
-                                      table=table)
-            except (UnsupportedOperation, RuntimeError) as exc:
-                if backend == "simd":
-                    raise
-                self.simd_error = str(exc)
-        self.backend = "simd" if self._simd is not None else "casadi"
-        self._big = self._small = None
-        self.compiled = True
-        if self._simd is None:
-            self._build_casadi()
-
-    def _build_casadi(self) -> None:
-        import casadi as ca
-
-        from ..codegen import compile_functions
-
-        step = self._step(ca)
-        s = ca.MX.sym("s", 11)
-        x = s
-        for _ in range(self.steps_per_call):
-            x = step(x)
-        chunk = ca.Function("ball_chunk", [s], [x])
-        big = chunk.map(self.batches[0], "thread", 2)
-        small = chunk.map(self.batches[1])
-        self._big, self._small = compile_functions([big, small], ("-O2",))
-        self.compiled = self._big.class_name() == "External"
-
-    def _step(self, ca, tabulated_input: bool = False):
-        """The step as an SX Function of the state. With ``tabulated_input`` (tabulated
-        surfaces), the surface's table values are a second input instead of an interpolant
-        call; returns (step, lookup, table) for :class:`seds_casadi.simd.SimdLoop`."""
-        f, dt, r = self.field, self.dt, BALL_RADIUS
-        mg = MU_SLIDE * G
-        s = ca.SX.sym("s", 11)
-        p, u, sl, status, t = s[0:2], s[2:4], s[4:6], s[6], s[7]
-        if tabulated_input:
-            (xs, ys), values = f.surface.table(f.bounds)
-            aux = ca.SX.sym("aux", 6)
-            grad, fr = aux[0:2], aux[5]
-            hess = ca.vertcat(ca.horzcat(aux[2], aux[3]), ca.horzcat(aux[3], aux[4]))
-            lookup = dict(ix=0, iy=1, x0=xs[0], dx=xs[1] - xs[0], nx=len(xs), y0=ys[0],
-                          dy=ys[1] - ys[0], ny=len(ys), channels=6)
-        else:
-            grad, hess, fr = f.surface.casadi_terms(p, f.bounds)
-        curv = ca.mtimes([u.T, hess, u])
-        s2 = 1 + ca.dot(grad, grad)
-        s_mag = ca.norm_2(sl)
-        slide = ca.fmin(ca.fmax(s_mag / (3.5 * mg * dt), 0.0), 1.0)
-        rolling = slide <= 0
-        s_hat = sl / ca.fmax(s_mag, 1e-12)
-        full = -((G + curv) / s2) * grad
-        acc = -(((5.0 / 7.0 + (2.0 / 7.0) * slide) * G + curv) / s2) * grad
-        vs = ca.sqrt(ca.dot(u, u) + ca.dot(grad, u) ** 2)
-        unit = u / ca.fmax(vs, 1e-12)
-        resist_roll = (1 - slide) * (5.0 / 7.0) * f.rolling_resistance * fr * G
-        slope = ca.norm_2(acc)
-        rest = ca.logic_and(ca.logic_and(ca.norm_2(u) < STOP_SPEED, rolling),
-                            slope <= resist_roll)
-        dv = dt * (acc - resist_roll * unit - slide * mg * s_hat)
-        new_s = sl + dt * (full - 3.5 * mg * s_hat)
-        new_s = ca.if_else(ca.logic_or(slide < 1, ca.dot(new_s, sl) < 0), ca.DM.zeros(2), new_s)
-        holds = slope <= resist_roll + slide * mg
-        nu = u + dv
-        reverse = ca.logic_and(ca.dot(nu, u) < 0, holds)
-        nu = ca.if_else(ca.logic_or(reverse, rest), ca.DM.zeros(2), nu)
-        speed = ca.norm_2(u)
-        decel = ca.fmax(-ca.dot(dv, u) / ca.fmax(speed, 1e-12), 1e-12) / dt
-        tau = ca.fmin(speed / decel, dt)
-        npos = p + ca.if_else(reverse, 0.5 * tau, 0.5 * dt) * (u + nu)
-        seg = npos - p
-        L2 = ca.fmax(ca.dot(seg, seg), 1e-300)
-        hole = s[8:10]
-        lam = ca.fmin(ca.fmax(ca.dot(hole - p, seg) / L2, 0.0), 1.0)
-        off = ca.norm_2(p + lam * seg - hole)
-        R = f.hole_radius
-        cap = 2 * ca.sqrt(ca.fmax(R**2 - off**2, 0.0)) / np.sqrt(2 * r / G)
-        drop = ca.logic_and(off < R, ca.norm_2(nu) < cap)
-        b = f.bounds
-        pos, vel, slip, lost, n_hit = [], [], [], 0, s[10]
-        for j, (lo, hi) in enumerate(((b[0], b[1]), (b[2], b[3]))):
-            low, high = npos[j] < lo + r, npos[j] > hi - r
-            if f.boundary == "walls":
-                hit = ca.logic_or(low, high)
-                n_hit = n_hit + hit
-                pos.append(ca.if_else(low, 2 * (lo + r) - npos[j],
-                                      ca.if_else(high, 2 * (hi - r) - npos[j], npos[j])))
-                vel.append(ca.if_else(hit, -f.wall_restitution * nu[j], nu[j]))
-                slip.append(ca.if_else(hit, new_s[j] - (1 + f.wall_restitution) * nu[j],
-                                       new_s[j]))
-            else:
-                pos.append(npos[j])
-                vel.append(nu[j])
-                slip.append(new_s[j])
-                lost = ca.logic_or(lost, ca.logic_or(npos[j] < lo, npos[j] > hi))
-        new_status = ca.if_else(drop, 1, ca.if_else(lost, 2, ca.if_else(rest, 3, 0)))
-        new = ca.vertcat(pos[0], pos[1], vel[0], vel[1], slip[0], slip[1], new_status, t + dt,
-                         hole, n_hit)
-        out = ca.if_else(status == 0, new, s)
-        if tabulated_input:
-            return ca.Function("ball_step", [s, aux], [out]), lookup, values
-        return ca.Function("ball_step", [s], [out])
-
-    def run(self, P: np.ndarray, U: np.ndarray, max_time: float = 20.0,
-            hole: np.ndarray | None = None) -> ShotResult:
-        """Simulate shots from positions P (n, 2) with launch velocities U (n, 2) and holes
-        ``hole`` (n, 2; default the field's). Inputs are not validated here: use
-        :func:`simulate_shots`."""
-        n = len(P)
-        S = np.zeros((11, n))
-        S[8:10] = (np.tile(self.field.hole, (n, 1)) if hole is None else hole).T
-        S[0:2] = P.T
-        S[2:4] = U.T
-        S[4:6] = U.T  # no spin at the impact: the contact point slips at the ball's speed
-        if self._simd is not None:
-            # blocks stop once all their shots are done; between calls the finished shots are
-            # dropped so that the blocks stay full of moving ones
-            left = int(np.ceil(max_time / self.dt - 1e-9))
-            active = np.arange(n)
-            while active.size and left > 0:
-                k = min(left, self.steps_per_call)
-                X = np.ascontiguousarray(S[:, active])
-                self._simd.run(X, k)
-                S[:, active] = X
-                left -= k
-                active = active[X[6] == 0]
-            return self._result(S, max_time)
-        active = np.arange(n)
-        nb, ns = self.batches
-        t_call = self.steps_per_call * self.dt
-        elapsed = 0.0
-        while active.size and elapsed < max_time - 1e-12:
-            n_big = (active.size // nb) * nb
-            m = n_big + int(np.ceil((active.size - n_big) / ns)) * ns
-            X = np.zeros((11, m))
-            X[6] = 1.0  # padding: frozen
-            X[:, :active.size] = S[:, active]
-            out = np.empty_like(X)
-            for c in range(0, n_big, nb):
-                out[:, c:c + nb] = np.asarray(self._big(X[:, c:c + nb]))
-            for c in range(n_big, m, ns):
-                out[:, c:c + ns] = np.asarray(self._small(X[:, c:c + ns]))
-            S[:, active] = out[:, :active.size]
-            elapsed += t_call
-            active = active[S[6, active] == 0]
-        return self._result(S, max_time)
-
-    @staticmethod
-    def _result(S: np.ndarray, max_time: float) -> ShotResult:
-        # a shot still rolling at the limit, or past it within the last call
-        over = (S[7] > max_time + 1e-9) | (S[6] == 0)
-        status = np.where(over, 0, S[6]).astype(int)
-        return ShotResult(status == 1, status == 2, status == 3, S[0:2].T.copy(),
-                          np.where(over, max_time, S[7]), None, S[10].astype(int))
+        return getattr(_kernel_module, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

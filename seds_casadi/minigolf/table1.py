@@ -49,7 +49,10 @@ TRAINING_SETS = {
 MODELS_BY_STRATEGY = {"fixed_speed": ("gpr", "gmr"), "minimal_speed": ("gpr", "sep_gmr", "gmr")}
 N_COMPONENTS = {"fixed_speed": 2, "minimal_speed": 3}
 N_TEST_SITUATIONS = 30
-CSV_COLUMNS = ("field", "training", "model", "rmse_angle", "rmse_speed", "success_rate",
+#: columns of ``table1.csv``: the RMSE of the hitting angle [deg] and of the hitting speed
+#: kappa v* [m/s] (empty without a speed output), the success rate (a fraction) and the model's
+#: number of parameters
+CSV_COLUMNS = ("field", "training", "model", "rmse_angle_deg", "rmse_speed_mps", "success_rate",
                "n_params")
 
 #: The paper's Table 1: (field, training, model) -> (rmse_angle [deg], rmse_speed, success, #)
@@ -77,7 +80,12 @@ PAPER_TABLE1 = {
 
 @dataclass
 class Table1Row:
-    """One line of Table 1 (means over repetitions) or of one repetition."""
+    """One line of Table 1 (means over repetitions) or of one repetition.
+
+    ``rmse_angle`` is in degrees, ``rmse_speed`` (of the hitting speed kappa v*) in m/s (NaN
+    when the models predict the angle only), ``success_rate`` a fraction, ``n_params`` the
+    model's number of parameters.
+    """
 
     field: str
     training: str
@@ -249,8 +257,9 @@ def format_table1(rows: list[Table1Row]) -> str:
 
 
 def write_table1_csv(rows: list[Table1Row], path: str | os.PathLike) -> None:
-    """Write ``field, training, model, rmse_angle, rmse_speed, success_rate, n_params``
-    (atomically: a partial file never appears under the final name; no speed: empty)."""
+    """Write the rows with the columns :data:`CSV_COLUMNS` (``field, training, model,
+    rmse_angle_deg, rmse_speed_mps, success_rate, n_params``; atomically: a partial file never
+    appears under the final name; no speed: empty)."""
     atomic_csv(path, CSV_COLUMNS,
                ([r.field, r.training, r.model, r.rmse_angle,
                  "" if np.isnan(r.rmse_speed) else r.rmse_speed, r.success_rate, r.n_params]

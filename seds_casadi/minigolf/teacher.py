@@ -1,11 +1,12 @@
 """The teacher: good hitting parameters for a situation, found on the field's ball model.
 
 The paper (Sections 3, 5 and 7.2) trains the hitting-parameter model on examples of good shots
-given by a teacher. Here the teacher searches the ball model of :mod:`seds_casadi.ball`:
+given by a teacher. Here the teacher searches the ball model of :mod:`seds_casadi.minigolf.ball`:
 
 * A hit is the learned motion's default hit turned by alpha and scaled by kappa (Eq. 14 at the
-  ball): club-head velocity kappa v* R_alpha psi* (:class:`Stroke`), ball launch velocity by
-  :func:`seds_casadi.ball.impact`.
+  ball): club-head velocity kappa v* R_alpha psi*
+  (:class:`~seds_casadi.minigolf.stroke.Stroke`), ball launch velocity by
+  :func:`seds_casadi.minigolf.ball.impact`.
 * The **situation** s is the hole's position relative to the ball in the field's plane (2-D).
 * A **success map** (Fig. 4a) is success or failure over an (alpha, kappa) grid for one
   situation. Successful regions that are not connected are different **strategies**; training
@@ -21,22 +22,22 @@ given by a teacher. Here the teacher searches the ball model of :mod:`seds_casad
     region's speed range, and alpha in the middle of its interval at that speed (a choice the
     paper leaves open; it makes the examples robust to the ball model's step).
 
-Data sets as in the paper (:func:`paper_situations`): 20 situations along one input dimension
-(the hole moved sideways along the far edge, ball fixed) for the rough flat and double hill
-fields, 56 (a 7 x 8 grid of ball positions) for arctan.
+Data sets as in the paper (:func:`~seds_casadi.minigolf.hitting_data.paper_situations`,
+kept in a :class:`~seds_casadi.minigolf.hitting_data.HittingDataset`): 20 situations along one
+input dimension (the hole moved sideways along the far edge, ball fixed) for the rough flat and
+double hill fields, 56 (a 7 x 8 grid of ball positions) for arctan.
 """
 
 from __future__ import annotations
 
-import json
-import os
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core._io import atomic_npz
-from .ball import CLUB_MASS, MU_SLIDE, RESTITUTION, G, impact, simulate_shots
+from .ball import MU_SLIDE, G, simulate_shots
 from .fields import Field, load_field
+from .hitting_data import HittingDataset, paper_situations, region_centre
+from .stroke import Stroke
 
 __all__ = ["Stroke", "Teacher", "HittingDataset", "success_map", "paper_situations",
            "collect_dataset", "STRATEGIES", "FIXED_SPEED_OVERSHOOT", "default_strategy"]
@@ -48,62 +49,6 @@ FIXED_SPEED_OVERSHOOT = 0.6  # m past the hole for the fixed-speed strategy's de
 def default_strategy(field: Field) -> str:
     """The paper's strategy for a field: minimal speed on arctan, fixed speed elsewhere."""
     return "minimal_speed" if field.surface.shape == "arctan" else "fixed_speed"
-
-
-@dataclass(frozen=True)
-class Stroke:
-    """The learned motion's default hit: direction psi* and speed v* (Eq. 13).
-
-    Attributes
-    ----------
-    direction : array, shape (3,)
-        psi*, unit; the field's normal is +z.
-    speed : float
-        v* [m/s].
-    club_mass, restitution : float
-        Impact model (see :func:`seds_casadi.ball.impact`).
-    """
-
-    direction: np.ndarray
-    speed: float
-    club_mass: float = CLUB_MASS
-    restitution: float = RESTITUTION
-
-    def __post_init__(self) -> None:
-        d = np.asarray(self.direction, dtype=float).reshape(-1)
-        if d.shape != (3,) or not np.all(np.isfinite(d)) or np.linalg.norm(d[:2]) < 1e-6:
-            raise ValueError("direction must be a finite 3-vector with a horizontal part")
-        if not (np.isfinite(self.speed) and self.speed > 0):
-            raise ValueError(f"speed must be positive, got {self.speed}")
-        object.__setattr__(self, "direction", d / np.linalg.norm(d))
-        object.__setattr__(self, "speed", float(self.speed))
-
-    @classmethod
-    def from_motion(cls, motion) -> Stroke:
-        """The stroke of a fitted :class:`~seds_casadi.motion.HittingMotion`."""
-        return cls(np.asarray(motion.hitting_direction), float(motion.hitting_speed))
-
-    def club_velocity(self, alpha, kappa) -> np.ndarray:
-        """kappa v* R_alpha psi* (Eq. 14 at the ball), shape (n, 3); alpha in radians."""
-        a, k = np.broadcast_arrays(np.asarray(alpha, dtype=float), np.asarray(kappa, dtype=float))
-        a, k = a.ravel(), k.ravel()
-        c, s = np.cos(a), np.sin(a)
-        d = self.direction
-        return (k * self.speed)[:, None] * np.column_stack(
-            [c * d[0] - s * d[1], s * d[0] + c * d[1], np.full_like(a, d[2])])
-
-    def launch_velocity(self, alpha, kappa) -> np.ndarray:
-        """Ball velocity after the impact, shape (n, 2)."""
-        return impact(self.club_velocity(alpha, kappa), self.club_mass, self.restitution)
-
-    def aim(self, s) -> np.ndarray:
-        """The angle alpha (radians) that points the hit straight at the hole, s of shape (n, 2)."""
-        s = np.atleast_2d(s)
-        return np.arctan2(s[:, 1], s[:, 0]) - np.arctan2(self.direction[1], self.direction[0])
-
-    def to_dict(self) -> dict:
-        return {"direction": self.direction.tolist(), "speed": self.speed,
-                "club_mass": self.club_mass, "restitution": self.restitution}
 
 
 def success_map(field: Field, stroke: Stroke, ball, hole, alphas, kappas,
@@ -216,7 +161,7 @@ class Teacher:
 
     def _default_kappa(self) -> float:
         f = self.field
-        dist = np.linalg.norm(f.hole - _centre(f.ball_region)) + FIXED_SPEED_OVERSHOOT
+        dist = np.linalg.norm(f.hole - region_centre(f.ball_region)) + FIXED_SPEED_OVERSHOOT
         a_roll = 5 / 7 * f.rolling_resistance * G
         # launch v0 skids to 5/7 v0 over d_s = 24/98 v0^2/(mu g) (see ball), then rolls
         # (5/7 v0)^2 / (2 a_roll): solve d_s + d_r = dist for v0
@@ -328,103 +273,6 @@ class Teacher:
         return HittingDataset(self.field.name, self.strategy, balls[ok], holes[ok],
                               out[ok, 0], out[ok, 1], self.stroke,
                               dropped=int((~ok).sum()))
-
-
-def _centre(region) -> np.ndarray:
-    return np.array([(region[0] + region[1]) / 2, (region[2] + region[3]) / 2])
-
-
-def paper_situations(field: Field, layout: str | None = None, n: int | None = None):
-    """The paper's situations for a field: balls and holes, each shape (n, 2).
-
-    ``layout="line"`` (default except on arctan): the ball at the centre of the ball region,
-    the hole moved sideways along the far edge (the field's hole x, y across the field),
-    ``n`` = 20. ``layout="grid"`` (arctan): the hole at its place, the ball on a 7 x 8 grid over
-    the ball region, ``n`` = 56 (or the nearest grid to ``n``).
-    """
-    if layout is None:
-        layout = "grid" if field.surface.shape == "arctan" else "line"
-    b, R = field.bounds, field.hole_radius
-    if layout == "line":
-        n = 20 if n is None else int(n)
-        margin = 0.15 * (b[3] - b[2])
-        ys = np.linspace(b[2] + margin, b[3] - margin, n)
-        holes = np.column_stack([np.full(n, field.hole[0]), ys])
-        balls = np.tile(_centre(field.ball_region), (n, 1))
-        assert np.all(np.abs(ys) <= b[3] - R)
-        return balls, holes
-    if layout == "grid":
-        n = 56 if n is None else int(n)
-        nx = max(2, int(round(np.sqrt(n * 7 / 8))))
-        ny = max(2, int(round(n / nx)))
-        r = field.ball_region
-        X, Y = np.meshgrid(np.linspace(r[0], r[1], nx), np.linspace(r[2], r[3], ny),
-                           indexing="ij")
-        balls = np.column_stack([X.ravel(), Y.ravel()])
-        return balls, np.tile(field.hole, (len(balls), 1))
-    raise ValueError(f"layout must be 'line' or 'grid', got {layout!r}")
-
-
-@dataclass
-class HittingDataset:
-    """Good shots for a field: situations and the teacher's (alpha, kappa).
-
-    Attributes
-    ----------
-    field : str
-    strategy : str
-    ball, hole : array, shape (n, 2)
-    alpha : array, shape (n,)
-        Hitting angles [rad].
-    kappa : array, shape (n,)
-    stroke : Stroke
-    dropped : int
-        Situations where the strategy found no successful hit.
-    """
-
-    field: str
-    strategy: str
-    ball: np.ndarray
-    hole: np.ndarray
-    alpha: np.ndarray
-    kappa: np.ndarray
-    stroke: Stroke
-    dropped: int = 0
-
-    def __len__(self) -> int:
-        return len(self.alpha)
-
-    @property
-    def situations(self) -> np.ndarray:
-        """s = hole - ball, shape (n, 2)."""
-        return self.hole - self.ball
-
-    @property
-    def outputs(self) -> np.ndarray:
-        """What the learners predict: alpha [deg] for fixed speed, (alpha [deg], kappa) else."""
-        a = np.rad2deg(self.alpha)
-        return a[:, None] if self.strategy == "fixed_speed" else np.column_stack([a, self.kappa])
-
-    def save(self, path: str | os.PathLike) -> None:
-        """Write an ``.npz`` file (atomic; no pickle)."""
-        atomic_npz(path, ball=self.ball, hole=self.hole, alpha=self.alpha, kappa=self.kappa,
-                   meta=np.array(json.dumps({"field": self.field, "strategy": self.strategy,
-                                             "dropped": self.dropped,
-                                             "stroke": self.stroke.to_dict()})))
-
-    @classmethod
-    def load(cls, path: str | os.PathLike) -> HittingDataset:
-        """Read a file written by :meth:`save`."""
-        try:
-            with np.load(path, allow_pickle=False) as z:
-                meta = json.loads(str(z["meta"]))
-                st = meta["stroke"]
-                return cls(meta["field"], meta["strategy"], z["ball"], z["hole"], z["alpha"],
-                           z["kappa"], Stroke(np.array(st["direction"]), st["speed"],
-                                              st["club_mass"], st["restitution"]),
-                           int(meta["dropped"]))
-        except (OSError, KeyError, ValueError) as exc:
-            raise ValueError(f"{path}: not a hitting data set ({exc})") from None
 
 
 def collect_dataset(field: Field | str, stroke: Stroke, layout: str | None = None,

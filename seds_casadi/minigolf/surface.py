@@ -1,0 +1,281 @@
+"""The surface of a field, z = H(x, y): its shapes, their validation, and H with its gradient,
+Hessian and friction factor, vectorised in numpy and symbolic in CasADi.
+
+Shapes and their parameters are listed in :mod:`seds_casadi.minigolf.fields` (the field file
+format). The analytic shapes ("plane", "hills", "arctan") have CasADi forms of the same
+formulas; the tabulated ones ("rough", "heightmap") are read by the compiled ball engine from a
+table of derivatives on a grid (:meth:`Surface.table`).
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+__all__ = ["Surface", "SHAPES"]
+
+#: the surface shapes a field file may use
+SHAPES = ("plane", "hills", "arctan", "rough", "heightmap")
+
+
+# ---------------------------------------------------------------- validation of a specification
+def _number(p: dict, where: str, key: str, positive: bool = False, default=None) -> float:
+    """The entry ``key`` of the specification ``p`` as a finite (or positive) number; a missing
+    entry takes ``default`` (written into ``p``) or is an error."""
+    if key not in p:
+        if default is None:
+            raise ValueError(f"{where}: missing entry {key!r} for shape {p['shape']!r}")
+        p[key] = default
+    try:
+        v = float(p[key])
+    except (TypeError, ValueError):
+        raise ValueError(f"{where}.{key}: not a number: {p[key]!r}") from None
+    if not np.isfinite(v) or (positive and v <= 0):
+        raise ValueError(f"{where}.{key}: must be {'positive' if positive else 'finite'},"
+                         f" got {p[key]!r}")
+    return v
+
+
+def _check_plane(p: dict, bounds, where: str) -> None:
+    _number(p, where, "slope_x", default=0.0)
+    _number(p, where, "slope_y", default=0.0)
+
+
+def _check_hills(p: dict, bounds, where: str) -> None:
+    hills = p.get("hills")
+    if not isinstance(hills, list) or not hills:
+        raise ValueError(f"{where}.hills: a non-empty list of hills is needed")
+    for i, h in enumerate(hills):
+        for k in ("x", "y", "height", "width"):
+            if k not in h:
+                raise ValueError(f"{where}.hills[{i}]: missing entry {k!r}")
+            if not np.isfinite(float(h[k])):
+                raise ValueError(f"{where}.hills[{i}].{k}: must be finite")
+        if float(h["width"]) <= 0:
+            raise ValueError(f"{where}.hills[{i}].width: must be positive")
+
+
+def _check_arctan(p: dict, bounds, where: str) -> None:
+    _number(p, where, "height")
+    _number(p, where, "steepness", positive=True)
+    _number(p, where, "y0", default=0.0)
+    if p.get("axis", "y") not in ("x", "y"):
+        raise ValueError(f"{where}.axis: 'x' or 'y', got {p.get('axis')!r}")
+
+
+def _check_rough(p: dict, bounds, where: str) -> None:
+    _number(p, where, "amplitude")
+    _number(p, where, "width", positive=True)
+    _number(p, where, "bumps", positive=True)
+    _number(p, where, "friction_variation", default=0.0)
+    if not 0 <= float(p["friction_variation"]) < 1:
+        raise ValueError(f"{where}.friction_variation: must be in [0, 1)")
+    p["_bounds"] = bounds
+
+
+def _check_heightmap(p: dict, bounds, where: str) -> None:
+    ext = p.get("extent")
+    if ext is None or len(ext) != 4 or not (ext[0] < ext[1] and ext[2] < ext[3]):
+        raise ValueError(f"{where}.extent: [xmin, xmax, ymin, ymax] with min < max needed")
+    Z = np.asarray(p.get("heights", []), dtype=float)
+    if Z.ndim != 2 or min(Z.shape) < 4:
+        raise ValueError(f"{where}.heights: a 2-D grid of at least 4 x 4 heights (rows "
+                         f"along y, columns along x) is needed, got shape {Z.shape}")
+    if not np.all(np.isfinite(Z)):
+        raise ValueError(f"{where}.heights: contains NaN or infinite values")
+    if (ext[0] > bounds[0] or ext[1] < bounds[1] or ext[2] > bounds[2]
+            or ext[3] < bounds[3]):
+        raise ValueError(f"{where}.extent {ext} does not cover the field's bounds {bounds}")
+
+
+_CHECKS = {"plane": _check_plane, "hills": _check_hills, "arctan": _check_arctan,
+           "rough": _check_rough, "heightmap": _check_heightmap}
+
+
+class Surface:
+    """z = H(x, y) with its gradient and Hessian, vectorised.
+
+    Build with :meth:`from_spec`; call ``height(P)``, ``gradient(P)``, ``hessian(P)`` with P of
+    shape (n, 2).
+    """
+
+    def __init__(self, shape: str, params: dict) -> None:
+        self.shape = shape
+        self.params = params
+        self._friction = None
+        if shape == "rough":
+            rng = np.random.default_rng(int(params.get("seed", 0)))
+            b = params["_bounds"]
+            n = int(params["bumps"])
+            self._c = np.column_stack([rng.uniform(b[0], b[1], n), rng.uniform(b[2], b[3], n)])
+            self._a = float(params["amplitude"]) * rng.uniform(-1, 1, n)
+            self._w = np.full(n, float(params["width"]))
+            fv = float(params.get("friction_variation", 0.0))
+            if fv:
+                m = max(4, n // 4)
+                fc = np.column_stack([rng.uniform(b[0], b[1], m), rng.uniform(b[2], b[3], m)])
+                fa = fv * rng.uniform(-1, 1, m)
+                fw = 3 * float(params["width"])
+                self._friction = (fc, fa, fw)
+        elif shape == "hills":
+            hills = params["hills"]
+            self._c = np.array([[h["x"], h["y"]] for h in hills], dtype=float).reshape(-1, 2)
+            self._a = np.array([h["height"] for h in hills], dtype=float)
+            self._w = np.array([h["width"] for h in hills], dtype=float)
+        elif shape == "heightmap":
+            from scipy.interpolate import RectBivariateSpline
+
+            ext = params["extent"]
+            Z = np.asarray(params["heights"], dtype=float)
+            xs = np.linspace(ext[0], ext[1], Z.shape[1])
+            ys = np.linspace(ext[2], ext[3], Z.shape[0])
+            self._spline = RectBivariateSpline(xs, ys, Z.T, kx=3, ky=3)
+
+    @classmethod
+    def from_spec(cls, spec: dict, bounds, where: str = "surface") -> Surface:
+        """Validate a surface specification (see :mod:`seds_casadi.minigolf.fields`) and build
+        it; errors name the entry (``where``)."""
+        if not isinstance(spec, dict) or "shape" not in spec:
+            raise ValueError(f"{where}: needs an entry 'shape' (one of {', '.join(SHAPES)})")
+        shape = spec["shape"]
+        if shape not in SHAPES:
+            raise ValueError(f"{where}.shape: unknown shape {shape!r}; valid: {', '.join(SHAPES)}")
+        p = dict(spec)
+        _CHECKS[shape](p, bounds, where)
+        return cls(shape, p)
+
+    # ---------------------------------------------------------------- evaluation
+    def _gauss(self, P):
+        d = P[:, None, :] - self._c[None]
+        g = self._a * np.exp(-np.sum(d * d, axis=2) / (2 * self._w**2))
+        return d, g
+
+    def height(self, P: np.ndarray) -> np.ndarray:
+        """H at points P, shape (n, 2) -> (n,)."""
+        P = np.atleast_2d(P)
+        s, p = self.shape, self.params
+        if s == "plane":
+            return p["slope_x"] * P[:, 0] + p["slope_y"] * P[:, 1]
+        if s in ("hills", "rough"):
+            return self._gauss(P)[1].sum(axis=1)
+        if s == "arctan":
+            u = P[:, 1] if p.get("axis", "y") == "y" else P[:, 0]
+            return p["height"] * np.arctan(p["steepness"] * (u - p["y0"])) / (np.pi / 2)
+        return self._spline.ev(P[:, 0], P[:, 1])
+
+    def gradient(self, P: np.ndarray) -> np.ndarray:
+        """(dH/dx, dH/dy) at P, shape (n, 2)."""
+        P = np.atleast_2d(P)
+        s, p = self.shape, self.params
+        if s == "plane":
+            return np.tile([p["slope_x"], p["slope_y"]], (len(P), 1))
+        if s in ("hills", "rough"):
+            d, g = self._gauss(P)
+            return -np.einsum("nk,nkj->nj", g / self._w**2, d)
+        if s == "arctan":
+            u = P[:, 1] if p.get("axis", "y") == "y" else P[:, 0]
+            k = p["steepness"]
+            du = p["height"] * k / (1 + (k * (u - p["y0"])) ** 2) / (np.pi / 2)
+            out = np.zeros((len(P), 2))
+            out[:, 1 if p.get("axis", "y") == "y" else 0] = du
+            return out
+        return np.column_stack([self._spline.ev(P[:, 0], P[:, 1], dx=1),
+                                self._spline.ev(P[:, 0], P[:, 1], dy=1)])
+
+    def hessian(self, P: np.ndarray) -> np.ndarray:
+        """Second derivatives of H at P, shape (n, 2, 2)."""
+        P = np.atleast_2d(P)
+        s, p = self.shape, self.params
+        out = np.zeros((len(P), 2, 2))
+        if s == "plane":
+            return out
+        if s in ("hills", "rough"):
+            d, g = self._gauss(P)
+            w2 = self._w**2
+            out = np.einsum("nk,nki,nkj->nij", g / w2**2, d, d)
+            out -= np.einsum("nk,ij->nij", g / w2, np.eye(2))
+            return out
+        if s == "arctan":
+            axis = 1 if p.get("axis", "y") == "y" else 0
+            u = P[:, axis]
+            k = p["steepness"]
+            z = k * (u - p["y0"])
+            out[:, axis, axis] = -p["height"] * 2 * k * k * z / (1 + z * z) ** 2 / (np.pi / 2)
+            return out
+        sp = self._spline
+        out[:, 0, 0] = sp.ev(P[:, 0], P[:, 1], dx=2)
+        out[:, 1, 1] = sp.ev(P[:, 0], P[:, 1], dy=2)
+        out[:, 0, 1] = out[:, 1, 0] = sp.ev(P[:, 0], P[:, 1], dx=1, dy=1)
+        return out
+
+    # ---------------------------------------------------------------- symbolic form
+    @property
+    def tabulated(self) -> bool:
+        """Whether :meth:`casadi_terms` reads the derivatives from a table (see :meth:`table`)."""
+        return self.shape in ("rough", "heightmap")
+
+    def table(self, bounds, spacing: float = 0.01) -> tuple[list[np.ndarray], np.ndarray]:
+        """Grid and values of (dH/dx, dH/dy, H_xx, H_xy, H_yy, friction factor) over ``bounds``.
+
+        Used by the compiled ball model for surfaces whose exact evaluation is expensive (many
+        bumps, splines); the values are interpolated linearly between grid points.
+
+        Returns
+        -------
+        grid : [xs, ys]
+        values : array, shape (6 * len(xs) * len(ys),)
+            Flattened in CasADi's interpolant order (channel fastest, then x, then y).
+        """
+        b = np.asarray(bounds, dtype=float)
+        xs = np.linspace(b[0], b[1], max(4, int(np.ceil((b[1] - b[0]) / spacing)) + 1))
+        ys = np.linspace(b[2], b[3], max(4, int(np.ceil((b[3] - b[2]) / spacing)) + 1))
+        X, Y = np.meshgrid(xs, ys, indexing="ij")
+        P = np.column_stack([X.ravel(order="F"), Y.ravel(order="F")])
+        g, h = self.gradient(P), self.hessian(P)
+        vals = np.column_stack([g[:, 0], g[:, 1], h[:, 0, 0], h[:, 0, 1], h[:, 1, 1],
+                                self.friction_factor(P)])
+        return [xs, ys], vals.ravel()
+
+    def casadi_terms(self, p, bounds=None, spacing: float = 0.01):
+        """Gradient (2,), Hessian (2, 2) and friction factor of H at the point ``p`` in CasADi.
+
+        Analytic for "plane", "hills" and "arctan" (the same formulas as :meth:`gradient` and
+        :meth:`hessian`); for tabulated shapes, a linear interpolation of :meth:`table` over
+        ``bounds`` (the table is embedded in the expression as constants).
+        """
+        s, prm = self.shape, self.params
+        if self.tabulated:
+            if bounds is None:
+                raise ValueError(f"a {s!r} surface is tabulated: give the bounds to cover")
+            grid, values = self.table(bounds, spacing)
+            v = ca.interpolant("surface_table", "linear", grid, values)(p)
+            hess = ca.vertcat(ca.horzcat(v[2], v[3]), ca.horzcat(v[3], v[4]))
+            return v[0:2], hess, v[5]
+        hess = ca.SX.zeros(2, 2) if isinstance(p, ca.SX) else ca.MX.zeros(2, 2)
+        if s == "plane":
+            return ca.vertcat(prm["slope_x"], prm["slope_y"]) + 0 * p, hess, 1.0
+        if s == "hills":
+            grad = 0 * p
+            for c, a, w in zip(self._c, self._a, self._w):
+                d = p - c
+                gk = a * ca.exp(-ca.dot(d, d) / (2 * w**2))
+                grad = grad - gk / w**2 * d
+                hess = hess + gk / w**4 * ca.mtimes(d, d.T) - gk / w**2 * ca.DM.eye(2)
+            return grad, hess, 1.0
+        axis = 1 if prm.get("axis", "y") == "y" else 0
+        k = prm["steepness"]
+        z = k * (p[axis] - prm["y0"])
+        du = prm["height"] * k / (1 + z * z) / (np.pi / 2)
+        duu = -prm["height"] * 2 * k * k * z / (1 + z * z) ** 2 / (np.pi / 2)
+        grad = ca.vertcat(0, du) if axis == 1 else ca.vertcat(du, 0)
+        hess[axis, axis] = duu
+        return grad, hess, 1.0
+
+    def friction_factor(self, P: np.ndarray) -> np.ndarray:
+        """Multiplier of the rolling resistance at P (1 except on fields with variation)."""
+        P = np.atleast_2d(P)
+        if self._friction is None:
+            return np.ones(len(P))
+        fc, fa, fw = self._friction
+        d = P[:, None, :] - fc[None]
+        return 1.0 + np.sum(fa * np.exp(-np.sum(d * d, axis=2) / (2 * fw**2)), axis=1)
