@@ -182,9 +182,9 @@ def _initial_theta(
 
 
 def build_problem(demos: Demonstrations, n_components: int, objective: str,
-                  omega_lower: float = 1.0, omega_upper: float = 2.0,
-                  stability_margin: float = 1e-3, random_state=None,
-                  compile: bool = True) -> SEDSProblem:
+              omega_lower: float = 1.0, omega_upper: float = 2.0,
+              stability_margin: float = 1e-3, random_state=None,
+              compile: bool = True) -> SEDSProblem:
     """Scale the data, initialise by k-means + EM and build the CasADi problem.
 
     Parameters are those of :class:`~seds_casadi.core.seds.SEDS` (already validated).
@@ -235,12 +235,10 @@ def build_problem(demos: Demonstrations, n_components: int, objective: str,
 
 
 def _bounds(layout: Layout) -> tuple[np.ndarray, np.ndarray]:
-    """Simple bounds on theta: prior logits within +-20, means within +-50 (scaled units),
-    exp-parametrised diagonals of the Cholesky factors within [1e-3, 1e2]."""
+    """Simple bounds on theta: means within +-50 (scaled units), exp-parametrised diagonals of
+    the Cholesky factors within [1e-3, 1e2]."""
     lbx = np.full(layout.size, -np.inf)
     ubx = np.full(layout.size, np.inf)
-    # prior logits: a component never vanishes (pi_k >= about 1e-9 pi_K), so Eq. 10 (d) holds
-    lbx[: layout.n_logits], ubx[: layout.n_logits] = -20.0, 20.0
     diag_pos = [i for i, (a, b) in enumerate(layout.tril) if a == b]
     for k in range(layout.K):
         s = layout.slices(k)
