@@ -116,3 +116,35 @@ def hitting_ds(X, alpha, kappa, motion):
     v = strength_factor(Y, sf.priors, sf.means, sf.covariances, sf.log_range)
     return kappa * (v[:, None] * H) @ R.T
 
+
+# ------------------------------------------------ the club head's orientation
+def log3(R):
+    """Rotation vector of R (so(3) log), with the limits near 0 and pi."""
+    c = np.clip((np.trace(R) - 1) / 2, -1.0, 1.0)
+    th = np.arccos(c)
+    w = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+    if th < 1e-6:
+        return 0.5 * w
+    if th > np.pi - 1e-4:
+        axis = np.sqrt(np.maximum((np.diag(R) + 1) / 2, 0))
+        k = int(np.argmax(axis))
+        axis[np.arange(3) != k] = R[k, np.arange(3) != k] / (2 * axis[k])
+        return th * axis / np.linalg.norm(axis)
+    return th / (2 * np.sin(th)) * w
+
+
+def orientation_error(R, Rd, full):
+    """log(Rd R^T), or R_x cross Rd_x (the face's normal only)."""
+    if full:
+        return log3(Rd @ R.T)
+    return np.cross(R[:, 0], Rd[:, 0])
+
+
+def face_orientation(direction):
+    """x along the horizontal part of direction (+x if none), z up."""
+    d = np.asarray(direction, float).copy()
+    d[2] = 0.0
+    n = np.linalg.norm(d)
+    x = d / n if n > 1e-9 else np.array([1.0, 0, 0])
+    z = np.array([0.0, 0.0, 1.0])
+    return np.column_stack([x, np.cross(z, x), z])
