@@ -441,6 +441,11 @@ def test_hitting_motion_learner_follows_scikit_learn(motion, demos):
     with pytest.warns(ConvergenceWarning, match="after 1 iterations"):  # reaches SEDS
         est.set_params(seds_params={"max_iter": 1}).fit(demos)
     assert est.motion_.target_field.ds.fit_info["iterations"] == 1
+    # random_state may be a Generator: the first seed is drawn from it, restarts follow it
+    with pytest.warns(ConvergenceWarning):
+        est.set_params(random_state=np.random.default_rng(4), restarts=2).fit(demos)
+    seeds = [t["seed"] for t in est.fit_info_["tries"]]
+    assert seeds[0] == int(np.random.default_rng(4).integers(2**31 - 1))
     # __init__ only stores; fit validates
     bad = HittingMotionLearner(restarts=0)
     with pytest.raises(ValueError, match="restarts"):

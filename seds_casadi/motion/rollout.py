@@ -222,8 +222,8 @@ def rollout(motion: HittingMotion, start, alpha: float = 0.0, kappa: float = 1.0
         track.add(t, x, v, b)
         psi = motion.commanded_direction(alpha)
         x_new = x + dt * v
-        crossed, lam, p_hit = plane_crossing(x, x_new, b, psi, hit_radius)
-        if crossed:
+        hit_now, lam, p_hit = plane_crossing(x, x_new, b, psi, hit_radius)
+        if hit_now:
             lam = float(lam)
             v_hit = (period_mean_velocity(track.P[-2], x, p_hit, lam, dt) if len(track.P) >= 2
                      else v.copy())
