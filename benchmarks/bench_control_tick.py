@@ -15,10 +15,8 @@ import time
 import numpy as np
 import pinocchio as pin
 
-from seds_casadi.motion.hitting import HittingMotion
-from seds_casadi.motion.putting_demos import load_hitting_demos
-from seds_casadi.robots.control import default_base, simulate_swing
-from seds_casadi.robots.models import load_robot
+from seds_casadi.motion import HittingMotion, load_hitting_demos
+from seds_casadi.robots import default_base, load_robot, simulate_swing
 
 
 def timeit(fn, n=3000):

@@ -1,8 +1,11 @@
 """Benchmark: one evaluation of the steered hitting DS (Eq. 14) from Python.
 
-Times, side by side in one run: the numpy path (``HittingMotion.velocity`` at one point), the
-CasADi Function from ``to_casadi()`` in CasADi's virtual machine, and the same Function compiled
-to C (code generation + the system compiler) and loaded with ``casadi.external``.
+Eq. 14 is defined once, as the CasADi Function of ``HittingMotion.to_casadi()``; this times, side
+by side in one run, the ways it is evaluated: ``HittingMotion.velocity`` at one point (input
+checks and CasADi's map over columns, the path for many points), the Function called directly
+in CasADi's virtual machine and through fixed buffers (``FastEvaluator``, the rollouts' path),
+and the same Function compiled to C (code generation + the system compiler) and loaded with
+``casadi.external`` (``HittingMotion.compiled()``: the controller's path).
 
 Usage: python benchmarks/bench_hitting_ds.py [--repeat 20000]
 """
@@ -19,8 +22,8 @@ import time
 import casadi as ca
 import numpy as np
 
-from seds_casadi.motion.hitting import HittingMotion
-from seds_casadi.motion.putting_demos import load_hitting_demos
+from seds_casadi.codegen import FastEvaluator
+from seds_casadi.motion import HittingMotion, load_hitting_demos
 
 
 def median_us(fn, repeat: int) -> float:
@@ -41,9 +44,12 @@ def main():
     alpha, kappa = 0.2, 1.1
     f = motion.to_casadi()
     out = {}
-    out["numpy (HittingMotion.velocity)"] = median_us(lambda: motion.velocity(x, alpha, kappa),
-                                                      args.repeat)
+    out["HittingMotion.velocity"] = median_us(lambda: motion.velocity(x, alpha, kappa),
+                                              args.repeat)
     out["CasADi virtual machine"] = median_us(lambda: f(x, alpha, kappa), args.repeat)
+    vm = FastEvaluator(f)
+    out["virtual machine, buffers (rollouts)"] = median_us(lambda: vm(x, alpha, kappa),
+                                                           args.repeat)
     cc = shutil.which("cc") or shutil.which("gcc")
     if cc:
         tmp = tempfile.mkdtemp()
@@ -69,10 +75,10 @@ def main():
                                rtol=1e-10)
     out["HittingMotion.compiled() (buffers)"] = median_us(lambda: fast(x, alpha, kappa),
                                                           args.repeat)
-    base = out["numpy (HittingMotion.velocity)"]
+    base = out["HittingMotion.velocity"]
     print(f"one evaluation of Eq. 14, median over {args.repeat} calls:")
     for name, us in out.items():
-        print(f"  {name:<34} {us:8.2f} us   ({base / us:5.1f}x numpy)")
+        print(f"  {name:<36} {us:8.2f} us   ({base / us:6.1f}x velocity)")
 
 
 if __name__ == "__main__":

@@ -20,8 +20,7 @@ import argparse
 
 import numpy as np
 
-from seds_casadi.motion.hitting import HittingMotion, rotation_z
-from seds_casadi.motion.putting_demos import load_hitting_demos
+from seds_casadi.motion import HittingMotion, load_hitting_demos, rotation_z
 
 
 def main():

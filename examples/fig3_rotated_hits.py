@@ -14,8 +14,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from seds_casadi.motion.hitting import HittingMotion, rotation_z
-from seds_casadi.motion.putting_demos import load_hitting_demos
+from seds_casadi.motion import HittingMotion, load_hitting_demos, rotation_z
 
 ap = argparse.ArgumentParser()
 ap.add_argument("--out", default="fig3.png")

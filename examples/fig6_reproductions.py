@@ -12,8 +12,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from seds_casadi.motion.hitting import HittingMotion
-from seds_casadi.motion.putting_demos import load_hitting_demos
+from seds_casadi.motion import HittingMotion, load_hitting_demos
 
 ap = argparse.ArgumentParser()
 ap.add_argument("--out", default="fig6.png")

@@ -18,10 +18,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from seds_casadi.motion.hitting import HittingMotion
-from seds_casadi.motion.putting_demos import load_hitting_demos
-from seds_casadi.robots.control import default_base, simulate_swing
-from seds_casadi.robots.models import load_robot
+from seds_casadi.motion import HittingMotion, load_hitting_demos
+from seds_casadi.robots import default_base, load_robot, simulate_swing
 
 ap = argparse.ArgumentParser()
 ap.add_argument("--out", default="fig8.png")

@@ -179,3 +179,81 @@ def seds_objective(
         cos = np.where(valid, num / np.where(valid, den, 1.0), 0.0)
         return float(-np.sum(weights * cos) / np.sum(weights))
     raise ValueError(f"unknown objective {objective!r}")
+
+
+# ------------------------------------------------ the hitting motion (Eq. 8, 12, 14)
+def target_field(X, ds, hitting_direction, tiny: float = 1e-200):
+    """Eq. 8 of a certified StableDS: (h, f), f = sum_k h^k(x) A_k (x - x*), h = f / ||f||
+    (psi* where ||f|| <= tiny); shapes (n, d)."""
+    d = ds.n_dims
+    w = responsibilities(X, ds.priors, ds.means[:, :d], ds.covariances[:, :d, :d])
+    F = np.einsum("nk,kij,nj->ni", w, ds.A, X - ds.target)
+    nrm = np.linalg.norm(F, axis=1)
+    H = np.where(nrm[:, None] > tiny, F / np.maximum(nrm, tiny)[:, None],
+                 np.asarray(hitting_direction)[None, :])
+    return H, F
+
+
+def saturate(g, log_range):
+    """The C1 tanh saturation of log v beyond the demonstrated range (identity inside)."""
+    lo, hi = log_range
+    if not (np.isfinite(lo) and np.isfinite(hi)):
+        return g
+    m = np.log(2.0)
+    return np.where(g > hi, hi + m * np.tanh((g - hi) / m),
+                    np.where(g < lo, lo + m * np.tanh((g - lo) / m), g))
+
+
+def strength_factor(X, priors, means, covariances, log_range):
+    """Eq. 12 in log v, saturated: v(x) = exp(sat(E[log v | x])), shape (n,)."""
+    d = means.shape[1] - 1
+    logv = gmr_predict(X, priors, means, covariances, np.arange(d), [d])[:, 0]
+    return np.exp(saturate(logv, log_range))
+
+
+def rotation_z(alpha):
+    c, s = np.cos(alpha), np.sin(alpha)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def hitting_ds(X, alpha, kappa, motion):
+    """Eq. 14, kappa R_alpha v(R_alpha^T x) h(R_alpha^T x), from a HittingMotion's parameters."""
+    R = rotation_z(alpha)
+    Y = X @ R  # rows: R^T x
+    tf, sf = motion.target_field, motion.strength
+    H, _ = target_field(Y, tf.ds, tf.hitting_direction)
+    v = strength_factor(Y, sf.priors, sf.means, sf.covariances, sf.log_range)
+    return kappa * (v[:, None] * H) @ R.T
+
+
+# ------------------------------------------------ the club head's orientation
+def log3(R):
+    """Rotation vector of R (so(3) log), with the limits near 0 and pi."""
+    c = np.clip((np.trace(R) - 1) / 2, -1.0, 1.0)
+    th = np.arccos(c)
+    w = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+    if th < 1e-6:
+        return 0.5 * w
+    if th > np.pi - 1e-4:
+        axis = np.sqrt(np.maximum((np.diag(R) + 1) / 2, 0))
+        k = int(np.argmax(axis))
+        axis[np.arange(3) != k] = R[k, np.arange(3) != k] / (2 * axis[k])
+        return th * axis / np.linalg.norm(axis)
+    return th / (2 * np.sin(th)) * w
+
+
+def orientation_error(R, Rd, full):
+    """log(Rd R^T), or R_x cross Rd_x (the face's normal only)."""
+    if full:
+        return log3(Rd @ R.T)
+    return np.cross(R[:, 0], Rd[:, 0])
+
+
+def face_orientation(direction):
+    """x along the horizontal part of direction (+x if none), z up."""
+    d = np.asarray(direction, float).copy()
+    d[2] = 0.0
+    n = np.linalg.norm(d)
+    x = d / n if n > 1e-9 else np.array([1.0, 0, 0])
+    z = np.array([0.0, 0.0, 1.0])
+    return np.column_stack([x, np.cross(z, x), z])

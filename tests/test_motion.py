@@ -1,10 +1,27 @@
-"""Hitting motion groundwork (issue 3): target field, strength factor, Eq. 14, resting mode."""
+"""Hitting motion (issue 3): target field, strength factor, Eq. 14, resting mode, rollouts; the
+CasADi expressions of Eq. 8, 12 and 14 against numpy oracles; the scikit-learn learners."""
 
+import casadi as ca
 import numpy as np
+import oracles
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from sklearn.base import clone
 
 from seds_casadi import SEDS, Demonstrations
-from seds_casadi.motion.hitting import HittingMotion, StrengthFactor, TargetField, rotation_z
+from seds_casadi.motion import (
+    HittingMotion,
+    HittingMotionLearner,
+    Perturbations,
+    StrengthFactor,
+    StrengthFactorLearner,
+    TargetField,
+    approach_paths,
+    plane_crossing,
+    rotation_z,
+    rotation_z_sx,
+)
 from seds_casadi.motion.putting_demos import generate_putting_demos
 
 
@@ -220,8 +237,6 @@ def test_probe_equals_rollout(motion, demos):
 
 
 def test_approach_paths_are_tangent_to_the_arrival_direction():
-    from seds_casadi.motion.hitting import approach_paths
-
     u = np.array([1.0, 0.2, 0.0]) / np.hypot(1.0, 0.2)
     P, V = approach_paths(u, 1.2, length=0.05, order=3.0)
     assert len(P) == 16
@@ -258,3 +273,182 @@ def test_a_badly_lined_up_fit_is_refitted_and_reported(demos):
         HittingMotion.fit(demos, restarts=0)
     with pytest.raises(ValueError, match="max_direction_error"):
         HittingMotion.fit(demos, max_direction_error=-1.0)
+
+
+# ---------------------------------------------------------------- one source of truth (issue 12)
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), log_scale=st.floats(-9.0, 1.0),
+       alpha=st.floats(-np.pi, np.pi), kappa=st.floats(0.1, 3.0))
+def test_casadi_eq8_eq12_eq14_equal_the_numpy_oracles(motion, seed, log_scale, alpha, kappa):
+    """The CasADi expressions, evaluated as the package does, against numpy re-implementations,
+    from a hair's breadth off the ball (1e-9 m) to 10 m away."""
+    rng = np.random.default_rng(seed)
+    X = rng.standard_normal((16, 3)) * 10.0**log_scale
+    tf, sf = motion.target_field, motion.strength
+    H, F = oracles.target_field(X, tf.ds, tf.hitting_direction)
+    np.testing.assert_allclose(tf(X), H, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(tf.velocity(X), F, rtol=1e-9, atol=1e-300)
+    v = oracles.strength_factor(X, sf.priors, sf.means, sf.covariances, sf.log_range)
+    np.testing.assert_allclose(sf(X), v, rtol=1e-9)
+    np.testing.assert_allclose(motion.velocity(X, alpha, kappa),
+                               oracles.hitting_ds(X, alpha, kappa, motion), rtol=1e-9, atol=1e-12)
+    # one point at a time (the rollouts' path) gives the same numbers
+    np.testing.assert_allclose(motion.velocity(X[0], alpha, kappa),
+                               oracles.hitting_ds(X[:1], alpha, kappa, motion)[0], rtol=1e-9,
+                               atol=1e-12)
+
+
+def test_target_field_at_the_ball_is_psi_star_in_casadi_and_the_oracle(motion):
+    tf = motion.target_field
+    X = np.array([[0.0, 0.0, 0.0], [1e-300, 0.0, 0.0]])
+    H, _ = oracles.target_field(X, tf.ds, tf.hitting_direction)
+    np.testing.assert_array_equal(tf(X), H)
+    np.testing.assert_array_equal(tf(X)[0], motion.hitting_direction)
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), K=st.integers(1, 4), far=st.floats(0.1, 100.0),
+       saturated=st.booleans())
+def test_strength_factor_with_its_saturation_equals_the_oracle(seed, K, far, saturated):
+    rng = np.random.default_rng(seed)
+    priors, means, covs = oracles.random_gmm(rng, K, 4)
+    log_range = ((float(means[:, 3].min()) - 0.1, float(means[:, 3].max()) + 0.1) if saturated
+                 else (-np.inf, np.inf))
+    sf = StrengthFactor(priors, means, covs, log_range)
+    X = rng.standard_normal((30, 3)) * far  # far away GMR extrapolates past both ends
+    want = oracles.strength_factor(X, priors, means, covs, log_range)
+    np.testing.assert_allclose(sf(X), want, rtol=1e-9)
+    if saturated:
+        lo, hi = log_range
+        assert np.all(np.log(sf(X)) < hi + np.log(2) + 1e-12)
+        assert np.all(np.log(sf(X)) > lo - np.log(2) - 1e-12)
+
+
+def test_rotation_sx_is_rotation_z():
+    for a in (-3.0, -0.4, 0.0, 1.2, np.pi):
+        np.testing.assert_allclose(np.asarray(ca.DM(rotation_z_sx(a))), rotation_z(a),
+                                   atol=1e-15)
+
+
+def test_eq14_in_casadi_is_built_on_eq8_and_eq12(motion):
+    """The Function of Eq. 14 is kappa R v h with the Functions of Eq. 8 and Eq. 12 (the same
+    expressions, not copies)."""
+    rng = np.random.default_rng(11)
+    f14, f8, f12 = motion.to_casadi(), motion.target_field.to_casadi(), motion.strength.to_casadi()
+    for _ in range(5):
+        x, a, k = rng.uniform(-0.4, 0.2, 3), rng.uniform(-1, 1), rng.uniform(0.5, 1.5)
+        R = rotation_z(a)
+        y = R.T @ x
+        want = k * R @ (float(f12(y)) * np.asarray(f8(y)[0]).ravel())
+        np.testing.assert_allclose(np.asarray(f14(x, a, k)).ravel(), want, rtol=1e-12,
+                                   atol=1e-15)
+
+
+# ---------------------------------------------------------------- hit detection, perturbations
+def test_plane_crossing_one_step_and_many_agree():
+    rng = np.random.default_rng(5)
+    target, psi = np.array([0.1, -0.2, 0.0]), rotation_z(0.3) @ np.array([1.0, 0.0, 0.0])
+    before = target + rng.normal(scale=0.02, size=(200, 3))
+    after = before + 0.01 * psi + rng.normal(scale=0.002, size=(200, 3))
+    hit, lam, point = plane_crossing(before, after, target, psi, 0.02)
+    assert 0 < hit.sum() < 200
+    for i in range(200):
+        h1, l1, p1 = plane_crossing(before[i], after[i], target, psi, 0.02)
+        assert bool(h1) == hit[i]  # the same reading (to rounding: BLAS sums rows its own way)
+        assert float(l1) == pytest.approx(lam[i], rel=1e-12, abs=1e-15)
+        np.testing.assert_allclose(p1, point[i], rtol=1e-13, atol=1e-16)
+        s0, s1 = (before[i] - target) @ psi, (after[i] - target) @ psi
+        if hit[i]:  # the crossing point is on the plane, within the radius
+            assert s0 < 0 <= s1 and abs((point[i] - target) @ psi) < 1e-15
+            assert np.linalg.norm(point[i] - target) <= 0.02
+    # a step away from the ball, or past it outside the radius, is no hit
+    assert not plane_crossing(target + 0.01 * psi, target + 0.02 * psi, target, psi, 0.02)[0]
+    side = target + np.array([0.0, 0.0, 0.5])
+    assert not plane_crossing(side - 0.01 * psi, side + 0.01 * psi, target, psi, 0.02)[0]
+
+
+def test_perturbations_are_handed_out_in_time_order_and_checked():
+    ev = Perturbations([{"t": 0.3, "ball": [1, 0, 0]}, {"t": 0.1, "alpha": 0.2}],
+                       ("ball", "alpha"))
+    assert ev.due(0.0) == []
+    assert ev.due(0.1) == [{"t": 0.1, "alpha": 0.2}]
+    assert ev.due(0.2) == []
+    assert [e["t"] for e in ev.due(1.0)] == [0.3]
+    assert [e["t"] for e in ev.applied] == [0.1, 0.3]
+    with pytest.raises(ValueError, match="finite time"):
+        Perturbations([{"ball": [0, 0, 0]}], ("ball",))
+    with pytest.raises(ValueError, match="finite time"):
+        Perturbations([{"t": np.nan}], ("ball",))
+    with pytest.raises(ValueError, match=r"unknown perturbation key\(s\) \['hole'\].*valid: t, ball"):
+        Perturbations([{"t": 0.1, "hole": [1, 0]}], ("ball",))
+
+
+def test_rollout_refuses_an_unknown_perturbation(motion, demos):
+    with pytest.raises(ValueError, match="unknown perturbation"):
+        motion.rollout(demos.positions[0][0], perturb=[{"t": 0.1, "hole": [2.4, 0.0]}])
+
+
+def test_a_kappa_change_mid_swing_takes_effect(motion, demos):
+    r = motion.rollout(demos.positions[0][0], perturb=[{"t": 0.1, "kappa": 1.4}])
+    assert r.hit and r.commanded_speed == pytest.approx(1.4 * motion.hitting_speed)
+    assert abs(r.speed_error) < 0.02
+
+
+# ---------------------------------------------------------------- scikit-learn convention
+def test_strength_factor_learner_follows_scikit_learn(demos):
+    X = np.concatenate(demos.positions)
+    S = np.concatenate([np.linalg.norm(v, axis=1) for v in demos.velocities])
+    keep = S > 1e-3 * S.max()
+    X, S = X[keep], S[keep]
+    est = StrengthFactorLearner(n_components=2, random_state=0)
+    assert est.get_params() == {"n_components": 2, "random_state": 0, "reg_covar": 1e-6}
+    twin = clone(est).set_params(n_components=3)
+    assert not hasattr(twin, "factor_") and twin.n_components == 3
+    est.fit(X, S)
+    np.testing.assert_allclose(est.predict(X), StrengthFactor.fit(X, S, 2, 0)(X), rtol=1e-12)
+    assert twin.fit(X, S).factor_.priors.shape == (3,)
+    assert est.factor_.priors.shape == (2,) and est.n_features_in_ == 3
+    assert est.score(X, S) > 0.5  # R^2 of the speeds
+    with pytest.raises(ValueError, match="n_components"):
+        StrengthFactorLearner(n_components=0).fit(X, S)
+    with pytest.raises(ValueError, match="one speed per position"):
+        StrengthFactorLearner().fit(X, S[:-1])
+
+
+def test_hitting_motion_learner_follows_scikit_learn(motion, demos):
+    est = HittingMotionLearner(n_components=3, random_state=0)
+    params = est.get_params()
+    assert params["n_components"] == 3 and params["approach_paths"] is True
+    assert params["seds_params"] is None and params["restarts"] == 3
+    # clone gives an unfitted copy with the same parameters; fitting it gives HittingMotion.fit's
+    # motion (the shortcut builds this learner)
+    twin = clone(est)
+    assert not hasattr(twin, "motion_") and twin.get_params() == params
+    X = np.random.default_rng(8).normal(scale=0.2, size=(20, 3))
+    got = twin.fit(demos).motion_
+    np.testing.assert_array_equal(got.velocity(X, 0.2, 1.1), motion.velocity(X, 0.2, 1.1))
+    assert twin.fit_info_ == motion.fit_info and twin.n_features_in_ == 3
+    # parameters set through set_params take effect in the next fit
+    est.set_params(strength_components=1, approach_paths=False, restarts=1,
+                   max_direction_error=180.0, rest_length=0.3)
+    m = est.fit(demos).motion_
+    assert m.strength.priors.shape == (1,)
+    assert est.fit_info_["approach_paths"] is False and len(est.fit_info_["tries"]) == 1
+    assert m.rest_length == 0.3
+    assert not np.allclose(m.target_field.ds.means, motion.target_field.ds.means)
+    from seds_casadi.core.errors import ConvergenceWarning
+
+    with pytest.warns(ConvergenceWarning, match="after 1 iterations"):  # reaches SEDS
+        est.set_params(seds_params={"max_iter": 1}).fit(demos)
+    assert est.motion_.target_field.ds.fit_info["iterations"] == 1
+    # random_state may be a Generator: the first seed is drawn from it, restarts follow it
+    with pytest.warns(ConvergenceWarning):
+        est.set_params(random_state=np.random.default_rng(4), restarts=2).fit(demos)
+    seeds = [t["seed"] for t in est.fit_info_["tries"]]
+    assert seeds[0] == int(np.random.default_rng(4).integers(2**31 - 1))
+    # __init__ only stores; fit validates
+    bad = HittingMotionLearner(restarts=0)
+    with pytest.raises(ValueError, match="restarts"):
+        bad.fit(demos)
+    with pytest.raises(TypeError, match="seds_params"):
+        HittingMotionLearner(seds_params=[("omega_upper", 3.0)]).fit(demos)

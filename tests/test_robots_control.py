@@ -2,16 +2,22 @@
 
 import os
 
+import casadi as ca
 import numpy as np
+import oracles
 import pinocchio as pin
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.spatial.transform import Rotation
 
-from seds_casadi.motion.hitting import HittingMotion, rotation_z
-from seds_casadi.motion.putting_demos import load_hitting_demos
-from seds_casadi.robots.control import (
+from seds_casadi.motion import HittingMotion, load_hitting_demos, rotation_z
+from seds_casadi.robots import (
     SwingController,
     default_base,
+    face_orientation,
     gravity_ratio,
+    orientation_error,
     place_head,
     simulate_swing,
 )
@@ -26,6 +32,7 @@ from seds_casadi.robots.models import (
     robot_names,
     wam_urdf,
 )
+from seds_casadi.robots.orientation import log3_sx, orientation_error_sx
 
 RNG = np.random.default_rng(7)
 
@@ -279,3 +286,64 @@ def test_effective_mass_at_the_face_matches_the_inverse_inertia():
         assert effective_mass(r, q, -n) == pytest.approx(m)
         # a plausible range: above half the head's 0.3 kg, below the whole arm with its club
         assert 0.3 * 0.5 < m < sum(i.mass for i in r.model.inertias)
+
+
+# ---------------------------------------------------------------- orientation, once in CasADi
+def _rotation(axis, angle):
+    axis = np.asarray(axis, float)
+    return Rotation.from_rotvec(angle * axis / np.linalg.norm(axis)).as_matrix()
+
+
+@settings(max_examples=60, deadline=None)
+@given(axis=st.lists(st.floats(-1, 1), min_size=3, max_size=3).filter(
+           lambda a: np.linalg.norm(a) > 1e-3),
+       angle=st.one_of(st.floats(0.0, np.pi), st.floats(0.0, 1e-5),
+                       st.floats(np.pi - 1e-3, np.pi)),
+       seed=st.integers(0, 2**31 - 1))
+def test_orientation_error_equals_the_oracle(axis, angle, seed):
+    """log(Rd R^T) in CasADi (with its limits at 0 and pi) against numpy, R = E^T Rd for a
+    random Rd and an error rotation E of any angle."""
+    Rd = Rotation.random(random_state=seed).as_matrix()
+    E = _rotation(axis, angle)
+    R = E.T @ Rd
+    e = orientation_error(R, Rd, True)
+    want = oracles.orientation_error(R, Rd, True)
+    if angle < np.pi - 1e-3:
+        np.testing.assert_allclose(e, want, atol=1e-9)
+    else:  # arccos is ill-conditioned at pi (1e-16 in the trace: 1e-8 in the angle)
+        np.testing.assert_allclose(e, want, atol=1e-6)
+    # the vector rotates R onto Rd (at pi either sign of the axis does); within 1e-4 rad of pi
+    # the axis is read from the diagonal, which assumes the symmetry of a turn by exactly pi
+    np.testing.assert_allclose(Rotation.from_rotvec(e).as_matrix() @ R, Rd,
+                               atol=1e-8 if angle < np.pi - 1e-3 else 1e-3)
+    np.testing.assert_allclose(orientation_error(R, Rd, False),
+                               oracles.orientation_error(R, Rd, False), atol=1e-15)
+
+
+def test_orientation_error_in_the_tick_is_the_same_expression():
+    """The symbolic error (what the compiled tick inlines) evaluates to the numeric one."""
+    rng = np.random.default_rng(3)
+    R_, Rd_ = ca.SX.sym("R", 3, 3), ca.SX.sym("Rd", 3, 3)
+    f = ca.Function("e", [R_, Rd_], [orientation_error_sx(R_, Rd_, True), log3_sx(R_)])
+    for _ in range(10):
+        R, Rd = (Rotation.random(random_state=rng.integers(2**31)).as_matrix() for _ in range(2))
+        e, lg = f(R, Rd)
+        np.testing.assert_allclose(np.asarray(e).ravel(), orientation_error(R, Rd, True),
+                                   atol=1e-15)
+        np.testing.assert_allclose(np.asarray(lg).ravel(), oracles.log3(R), atol=1e-8)
+    np.testing.assert_allclose(orientation_error(np.eye(3), np.eye(3), True), 0.0)
+
+
+@pytest.mark.parametrize("d", [[1.0, 0.2, 0.3], [-0.3, 0.5, 0.0], [0.0, 0.0, 1.0],
+                               [1e-12, 0.0, -1.0], [0.0, -2.0, 0.5]])
+def test_face_orientation_equals_the_oracle(d):
+    R = face_orientation(d)
+    np.testing.assert_allclose(R, oracles.face_orientation(d), atol=1e-15)
+    np.testing.assert_allclose(R.T @ R, np.eye(3), atol=1e-15)
+
+
+def test_swing_refuses_an_unknown_perturbation(motion):
+    r = load_robot("wam", base=default_base("wam"))
+    with pytest.raises(ValueError, match=r"unknown perturbation key\(s\) \['kappa'\]"):
+        simulate_swing(r, motion, np.array([0.0, 0.0, 0.02135]),
+                       perturb=[{"t": 0.1, "kappa": 1.2}])

@@ -1,0 +1,270 @@
+"""The 500 Hz controller that executes the hitting motion on a robot: damped-least-squares IK
+and inverse dynamics (paper Sections 6 and 7.1-7.2).
+
+Every control period (2 ms by default) :class:`SwingController` reads the club-head pose and
+the ball (from the simulation standing in for the sensors) and computes
+
+1. the Cartesian velocity of Eq. 14 at the club head, xdot = kappa R_a v(R_a^T x) h(R_a^T x)
+   (x relative to the ball; :func:`seds_casadi.motion.hitting_ds_sx`), or after the hit the
+   resting mode that stops the club;
+2. an orientation reference that keeps the club face perpendicular to the direction of approach
+   (the face's normal along the commanded hitting direction R_a psi* projected on the field,
+   the shaft vertical), tracked by an angular velocity proportional to the orientation error
+   (:mod:`seds_casadi.robots.orientation`); arms with five joints (the Katana) track the
+   face's normal only;
+3. joint velocities by damped least squares, qdot = J_w^T (J_w J_w^T + lambda^2 I)^-1 w e,
+   with task weights w (position before orientation) and, in the null space of the task, a
+   pull towards the home posture and away from joint limits (the WAM's redundancy); joint
+   velocities are scaled down together to respect the velocity limits, and the integrated
+   reference is kept inside the position limits;
+4. torques by inverse dynamics (RNEA) on the reference acceleration with PD feedback on the
+   joint errors: tau = RNEA(q, qd, qdd_ref + Kp (q_ref - q) + Kd (qd_ref - qd)); when a torque
+   would exceed its limit, the acceleration part is scaled down (gravity is always
+   compensated), so the limits hold unless gravity alone exceeds them.
+
+Steps 1-3 and the reference acceleration of step 4 are one CasADi Function compiled to C
+(:func:`tick_function`); the hit is detected by the motion's
+:func:`~seds_casadi.motion.rollout.plane_crossing`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from ..codegen import FastEvaluator, compile_functions
+from ..motion.golf import BALL_RADIUS
+from ..motion.hitting import HittingMotion, hitting_ds_sx
+from ..motion.resting import check_rest_mode, resting_system
+from ..motion.rollout import plane_crossing
+from .dynamics import gravity_ratio
+from .models import Robot
+from .orientation import face_orientation_sx, orientation_error_sx
+
+__all__ = ["Gains", "SwingController", "tick_function"]
+
+
+@dataclass
+class Gains:
+    """Controller settings (defaults suit the WAM and the Katana at 500 Hz).
+
+    Attributes
+    ----------
+    damping : float
+        lambda of the damped least squares.
+    orientation_gain : float
+        Angular velocity per radian of orientation error [1/s].
+    orientation_weight : float
+        Weight of the orientation rows against the position rows.
+    posture_gain : float
+        Null-space pull towards the home posture [1/s].
+    kp, kd : float
+        Joint feedback as the natural frequency [rad/s] and damping ratio of the joint errors:
+        the PD term is an acceleration that RNEA multiplies by the arm's inertia (computed
+        torque), so one setting fits arms of any size.
+    """
+
+    damping: float = 0.01
+    orientation_gain: float = 6.0
+    orientation_weight: float = 0.3
+    posture_gain: float = 1.0
+    kp: float = 120.0
+    kd: float = 1.0
+
+    @classmethod
+    def for_robot(cls, robot: Robot) -> Gains:
+        """Defaults by arm: five-joint arms (the Katana) hold the face's normal only, gently,
+        so that it does not pull the club head off its path (measured on the Fig. 7 cases:
+        direction errors up to 7 deg with the six-joint settings, 0.5 deg with these)."""
+        if robot.nv < 6:
+            return cls(orientation_gain=1.0, orientation_weight=0.1)
+        return cls()
+
+
+class SwingController:
+    """The 500 Hz controller (module docstring).
+
+    Parameters
+    ----------
+    robot : Robot
+    motion : HittingMotion
+    period : float
+        Control period [s] (2 ms: 500 Hz).
+    gains : Gains, optional
+    rest_mode : {"flat", "arc"}
+        Resting motion after the hit (``"arc"`` lifts the club, for fields it could touch).
+    hit_radius : float
+        The club hits the ball when it crosses the plane through the ball perpendicular to the
+        commanded direction within this distance of the ball's centre [m].
+    torque_limit : bool or None
+        Scale the commanded joint acceleration down when a torque would exceed its effort
+        limit (gravity and velocity terms are kept): the arm then lags its reference, which the
+        closed-loop DS corrects. Without it, torques are whatever inverse dynamics asks for.
+        None: on when the arm can hold its home posture against gravity within its effort
+        limits (the Katana's published efforts cannot: see ``robots/README.md``).
+    """
+
+    def __init__(self, robot: Robot, motion: HittingMotion, period: float = 0.002,
+                 gains: Gains | None = None, rest_mode: str = "flat",
+                 hit_radius: float = 0.02, torque_limit: bool | None = None) -> None:
+        if not (np.isfinite(period) and period > 0):
+            raise ValueError(f"the control period must be positive, got {period}")
+        self.robot, self.motion, self.period = robot, motion, float(period)
+        self.gains = gains or Gains.for_robot(robot)
+        self.rest_mode = check_rest_mode(rest_mode)
+        self.hit_radius = float(hit_radius)
+        if torque_limit is None:
+            torque_limit = gravity_ratio(robot, robot.q_home) < 1.0
+        self.torque_limit = bool(torque_limit)
+        self._ds = motion.compiled()
+        self._psi_cache = (np.nan, motion.commanded_direction(0.0))
+        self._zero_rest = (np.zeros(9), np.zeros(3))
+        Mb = robot.base_placement
+        self._base = (Mb.rotation.copy(), Mb.translation.copy())
+        self._base_flat = np.concatenate([Mb.rotation.ravel(order="F"), Mb.translation])
+        self._margin = 0.05 * (robot.upper - robot.lower)
+        self._effort = np.where(robot.effort > 0, robot.effort, np.inf)
+        self._zeros = np.zeros(robot.nv)
+        self._step = FastEvaluator(compile_functions([tick_function(self)])[0])
+        self.reset(robot.q_home)
+
+    def reset(self, q: np.ndarray) -> None:
+        """Start a swing from the measured configuration ``q``."""
+        self.q_ref = np.asarray(q, float).copy()
+        self.qd_ref = np.zeros(self.robot.nv)
+        self.hit = None
+        self._rest = None
+        self._prev = None
+
+    def _psi(self, alpha: float) -> np.ndarray:
+        """R_alpha psi* (cached for the last alpha: it rarely changes between ticks)."""
+        if alpha != self._psi_cache[0]:
+            self._psi_cache = (alpha, self.motion.commanded_direction(alpha))
+        return self._psi_cache[1]
+
+    def contact_point(self, ball, alpha: float) -> np.ndarray:
+        """Where the club face meets the ball: the ball's centre minus one ball radius along
+        the commanded direction (horizontal). The DS's target is this point: the club face
+        (the ``club_head`` frame) passes through it with the commanded velocity."""
+        psi = self._psi(alpha)
+        h = np.hypot(psi[0], psi[1])
+        return np.asarray(ball, float) - (BALL_RADIUS / h) * np.array([psi[0], psi[1], 0.0])
+
+    def _detect_hit(self, x, target, alpha, kappa, t) -> None:
+        """The club hits when it crosses the plane through the contact point perpendicular to
+        the commanded direction, within ``hit_radius`` (:func:`plane_crossing`, the motion's
+        hit reading); then the resting mode takes over."""
+        psi = self._psi(alpha)
+        if self.hit is None and self._prev is not None:
+            p0 = self._prev
+            hit, lam, p_hit = plane_crossing(p0, x, target, psi, self.hit_radius)
+            if hit:
+                lam = float(lam)
+                self.hit = {"t": t - (1 - lam) * self.period, "lam": lam,
+                            "position": p_hit, "psi": psi.copy(),
+                            "commanded": kappa * self.motion.hitting_speed * psi}
+                # the DS's velocity just before the contact point (past it, the attractor
+                # points back): the resting mode continues it and slows down
+                v = np.asarray(self._ds(p0 - target, alpha, kappa))
+                self._rest = resting_system(p_hit, v, self.motion.rest_length, self.rest_mode)
+        self._prev = x
+
+    def tick(self, q, qd, ball, alpha: float = 0.0, kappa: float = 1.0,
+             t: float = 0.0) -> np.ndarray:
+        """Torques for one period from the measured state (q, qd) and the ball position."""
+        import pinocchio as pin
+
+        r = self.robot
+        q = np.asarray(q, float)
+        qd = np.asarray(qd, float)
+        model, data = r.model, r.data
+        pin.computeJointJacobians(model, data, q)
+        pin.updateFramePlacements(model, data)
+        M = data.oMf[r.head_frame]
+        Jl = pin.getFrameJacobian(model, data, r.head_frame, pin.LOCAL_WORLD_ALIGNED)
+        Rb, pb = self._base
+        x = Rb @ M.translation + pb
+        target = self.contact_point(ball, alpha)
+        self._detect_hit(x, target, alpha, kappa, t)
+        direction = self.hit["psi"] if self.hit is not None else self._psi(alpha)
+        rest = ((self._rest[0].ravel(order="F"), self._rest[1]) if self._rest is not None
+                else self._zero_rest)
+        out = self._step(np.concatenate([
+            q, qd, self.q_ref, self.qd_ref, M.translation, M.rotation.ravel(order="F"),
+            Jl.ravel(order="F"), target, (alpha, kappa, float(self._rest is not None)),
+            rest[0], rest[1], direction, self._base_flat]))
+        n = r.nv
+        self.qd_ref, self.q_ref, a = out[:n], out[n:2 * n], out[2 * n:3 * n]
+        tau = pin.rnea(r.model, r.data, q, qd, a).copy()
+        if self.torque_limit and np.any(np.abs(tau) > self._effort):
+            tau = self._limit_torque(q, qd, tau)
+        return tau
+
+    def _limit_torque(self, q, qd, tau) -> np.ndarray:
+        """Torque-limited computed torque: scale the commanded acceleration (not gravity and
+        velocity terms) until every joint is within its effort limit."""
+        import pinocchio as pin
+
+        r, eff = self.robot, self._effort
+        bias = pin.rnea(r.model, r.data, q, qd, self._zeros)
+        d = tau - bias
+        over = np.abs(tau) > eff
+        # largest s in [0, 1] with |bias + s d| <= eff on the joints that are over
+        s = float(np.clip(np.min((np.sign(d[over]) * eff[over] - bias[over]) / d[over]),
+                          0.0, 1.0))
+        return bias + s * d
+
+
+def _joint_velocities(ctl: SwingController, q, J, v, w):
+    """Step 3: damped least squares on the weighted task (v, w) with the null-space posture pull,
+    scaled to the velocity limits."""
+    r, g = ctl.robot, ctl.gains
+    W = ca.DM([1, 1, 1] + [g.orientation_weight] * 3)
+    Jw = ca.diag(W) @ J
+    e = W * ca.vertcat(v, g.orientation_gain * w)
+    JJt = Jw @ Jw.T + g.damping**2 * ca.DM.eye(6)
+    lo, hi = ca.DM(r.lower) + ca.DM(ctl._margin), ca.DM(r.upper) - ca.DM(ctl._margin)
+    pull = g.posture_gain * (ca.DM(r.q_home) - q) + 5.0 * (ca.fmax(lo - q, 0) - ca.fmax(q - hi, 0))
+    # qd = Jw^T (JJt)^-1 e + (I - Jw^T (JJt)^-1 Jw) pull = pull + Jw^T (JJt)^-1 (e - Jw pull)
+    qd_new = pull + Jw.T @ ca.solve(JJt, e - Jw @ pull)
+    vlim = ca.DM(np.where(r.velocity_limit > 0, r.velocity_limit, 1e9))
+    scale = ca.mmax(ca.fabs(qd_new) / vlim)
+    return qd_new / ca.fmax(scale, 1.0)
+
+
+def tick_function(ctl: SwingController) -> ca.Function:
+    """One control tick after the kinematics (steps 1-4 of the module docstring, up to the
+    acceleration handed to RNEA) as one CasADi Function of one packed input, to be compiled to
+    C: about 10x faster than the same numpy code, which a 500 Hz loop in Python needs."""
+    r, g, n = ctl.robot, ctl.gains, ctl.robot.nv
+    q, qd, q_ref, qd_ref = (ca.SX.sym(s, n) for s in ("q", "qd", "q_ref", "qd_ref"))
+    p_loc, R_loc = ca.SX.sym("p", 3), ca.SX.sym("R", 3, 3)
+    J_loc = ca.SX.sym("J", 6, n)
+    target, alpha, kappa, resting = (ca.SX.sym("target", 3), ca.SX.sym("alpha"),
+                                     ca.SX.sym("kappa"), ca.SX.sym("resting"))
+    A, rest, direction = ca.SX.sym("A", 3, 3), ca.SX.sym("rest", 3), ca.SX.sym("dir", 3)
+    # the base placement is an input, so that one compiled tick serves any placement
+    Rb, pb = ca.SX.sym("Rb", 3, 3), ca.SX.sym("pb", 3)
+    x = Rb @ p_loc + pb
+    R = Rb @ R_loc
+    J = ca.vertcat(Rb @ J_loc[:3, :], Rb @ J_loc[3:, :])
+    v_ds = hitting_ds_sx(x - target, alpha, kappa, ctl.motion.target_field, ctl.motion.strength)
+    v = ca.if_else(resting > 0.5, A @ (x - rest), v_ds)
+    w = orientation_error_sx(R, face_orientation_sx(direction), n >= 6)
+    qd_new = _joint_velocities(ctl, q, J, v, w)
+    lower, upper = ca.DM(r.lower), ca.DM(r.upper)
+    qdd_ref = (qd_new - qd_ref) / ctl.period
+    q_next = ca.fmin(ca.fmax(q_ref + ctl.period * qd_new, lower), upper)
+    # the reference follows the arm: it never runs away from the measured state
+    q_next = q + ca.fmin(ca.fmax(q_next - q, -0.05), 0.05)
+    wn = g.kp
+    acc = qdd_ref + wn * wn * (q_next - q) + 2 * g.kd * wn * (qd_new - qd)
+    parts = [q, qd, q_ref, qd_ref, p_loc, R_loc, J_loc, target, alpha, kappa, resting, A, rest,
+             direction, Rb, pb]
+    flat = ca.vertcat(*[ca.vec(s) for s in parts])
+    # one packed input: a Python call then copies one array, not fourteen
+    z = ca.SX.sym("z", flat.numel())
+    out = ca.vertcat(qd_new, q_next, acc, v)
+    return ca.Function("control_tick", [z], [ca.substitute(out, flat, z)])

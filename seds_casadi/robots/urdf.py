@@ -1,0 +1,158 @@
+"""URDFs of the shipped arms, generated from the tables their numbers come from.
+
+* **Barrett WAM 7-DoF**: libbarrett's standard DH table and inertials (:func:`wam_urdf`;
+  shipped as ``robots/wam7.urdf``).
+* **Katana 6M180**: the joint origins of ``katana_description`` (five arm joints; the gripper
+  is a rigid body here) (:func:`katana_urdf`; ``robots/katana_6m180.urdf``). The public
+  description gives link masses but no centres of mass or inertias: those are estimated as
+  solid cylinders along each link (documented in ``robots/README.md``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..core._io import data_folder
+
+__all__ = ["wam_urdf", "katana_urdf", "ROBOTS_FOLDER", "WAM_DH", "KATANA_ORIGINS", "KATANA_TOOL"]
+
+#: folder of the shipped URDFs (the repository's ``robots/``, installed as package data)
+ROBOTS_FOLDER = data_folder("seds_casadi._robots")
+
+#: libbarrett ``wam7w.conf``: standard DH (alpha, a, d) per joint, theta = q.
+WAM_DH = np.array([[-np.pi / 2, 0.0, 0.0], [np.pi / 2, 0.0, 0.0], [-np.pi / 2, 0.045, 0.55],
+                   [np.pi / 2, -0.045, 0.0], [-np.pi / 2, 0.0, 0.30], [np.pi / 2, 0.0, 0.0],
+                   [-np.pi / 2, 0.0, 0.0609]])
+WAM_SHOULDER_HEIGHT = 0.346
+WAM_MASSES = [10.7677, 3.8749, 1.8023, 2.1727, 0.3566, 0.4092, 0.0755]
+WAM_COMS = [(-0.00443, 0.12189, -0.00066), (-0.00237, 0.03106, 0.01542),
+            (-0.03826, 0.20751, 0.00003), (0.00553, 0.00007, 0.11928),
+            (0.00005, 0.02886, 0.00148), (-0.00006, -0.01686, 0.02419),
+            (0.00015, 0.00007, -0.00335)]
+WAM_INERTIAS = [(0.13488, 0.11328, 0.09046, -0.00213, -0.00012, 0.00069),
+                (0.02141, 0.01378, 0.01559, 0.00027, 0.00002, -0.00182),
+                (0.05911, 0.00325, 0.05927, -0.00250, 0.00001, -0.00002),
+                (0.01067, 0.01059, 0.00282, 0.00005, -0.00136, -0.00011),
+                (0.00037, 0.00019, 0.00038, 0.0, 0.0, -0.00002),
+                (0.00055, 0.00024, 0.00045, 0.0, 0.0, -0.00004),
+                (0.00004, 0.00004, 0.00008, 0.0, 0.0, 0.0)]
+WAM_LIMITS = [(-2.6, 2.6), (-1.985, 1.985), (-2.8, 2.8), (-0.9, np.pi), (-4.8, 1.3),
+              (-1.5707, 1.5707), (-2.95, 2.95)]
+WAM_EFFORT = [60.0, 60.0, 45.0, 20.0, 5.0, 5.0, 5.0]
+WAM_VELOCITY = [3.0, 3.0, 4.0, 4.0, 8.0, 8.0, 8.0]  # not in the reference: ours, documented
+
+KATANA_ORIGINS = [((0, 0, 0.2015), (0, 0, 0)), ((0, 0, 0), (np.pi / 2, 0, 0)),
+                  ((0.19, 0, 0), (0, 0, 0)), ((0.139, 0, 0), (np.pi, 0, 0)),
+                  ((0.1523, 0, 0), (np.pi / 2, 0, -np.pi / 2))]
+# the description's tool frame is (0, 0, -0.1505; 0, pi/2, 0); the flange here is turned about
+# its y axis by another pi/2 so that its z axis points along the gripper (the club's shaft)
+KATANA_TOOL = ((0, 0, -0.1505), (0, np.pi, 0))
+KATANA_LIMITS = [(-3.0255, 2.8911), (-0.1352, 2.1686), (-2.2218, 2.0542), (-2.0333, 1.8761),
+                 (-2.9932, 2.8710)]
+KATANA_EFFORT = [1.5, 0.6, 0.25, 0.1, 0.01]
+KATANA_VELOCITY = [2.209, 1.191, 1.191, 2.209, 2.209]
+# link masses: links 1-4, and link 5 with the gripper body (0.256) and fingers (0.055)
+KATANA_MASSES = [0.748, 0.802, 0.792, 0.691, 0.256 + 0.055]
+# estimated centres of mass along each link (half way to the next joint) and cylinder radii
+KATANA_COMS = [(0, 0, 0), (0.095, 0, 0), (0.0695, 0, 0), (0.076, 0, 0), (0, 0, -0.075)]
+KATANA_RADIUS = 0.03
+
+
+def _rx(a) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
+
+
+def _f(v) -> str:
+    return " ".join(f"{float(x):.10g}" for x in v)
+
+
+def _inertial(mass, com, inertia) -> str:
+    ixx, iyy, izz, ixy, ixz, iyz = inertia
+    return (f'    <inertial>\n      <origin xyz="{_f(com)}" rpy="0 0 0"/>\n'
+            f'      <mass value="{mass:.10g}"/>\n'
+            f'      <inertia ixx="{ixx:.10g}" ixy="{ixy:.10g}" ixz="{ixz:.10g}" iyy="{iyy:.10g}" '
+            f'iyz="{iyz:.10g}" izz="{izz:.10g}"/>\n    </inertial>\n')
+
+
+def _joint(name, parent, child, xyz, rpy, lim=None, effort=None, vel=None) -> str:
+    if lim is None:
+        return (f'  <joint name="{name}" type="fixed">\n    <parent link="{parent}"/>\n'
+                f'    <child link="{child}"/>\n    <origin xyz="{_f(xyz)}" rpy="{_f(rpy)}"/>\n'
+                f'  </joint>\n')
+    return (f'  <joint name="{name}" type="revolute">\n    <parent link="{parent}"/>\n'
+            f'    <child link="{child}"/>\n    <origin xyz="{_f(xyz)}" rpy="{_f(rpy)}"/>\n'
+            f'    <axis xyz="0 0 1"/>\n    <limit lower="{lim[0]:.10g}" upper="{lim[1]:.10g}" '
+            f'effort="{effort:.10g}" velocity="{vel:.10g}"/>\n  </joint>\n')
+
+
+def wam_urdf() -> str:
+    """URDF of the Barrett WAM 7-DoF from libbarrett's DH table and inertials (REFERENCE).
+
+    Standard DH T_i = Rz(q_i) Tz(d_i) Tx(a_i) Rx(alpha_i): URDF joint i+1 sits at the fixed
+    part of T_i, so link i's URDF frame is DH frame i-1 turned by q_i; centres of mass and
+    inertias given in DH frame i are moved into it by that fixed part. The tool plate
+    (``wam_flange``) adds alpha = +pi/2 after DH frame 7: its z axis is joint 7's axis.
+    """
+    parts = ['<?xml version="1.0"?>\n<!-- generated by seds_casadi.robots.wam_urdf(); numbers: '
+             'libbarrett config/wam7w.conf (DH, masses, COMs, inertias), barrett_model URDF '
+             '(limits, efforts). Velocity limits are not in either: generous values. -->\n'
+             '<robot name="wam7">\n',
+             '  <link name="wam_base">\n' + _inertial(9.97, (0, 0, 0.1), (0.1, 0.1, 0.1, 0, 0, 0))
+             + '  </link>\n']
+    parent, xyz, rpy = "wam_base", (0, 0, WAM_SHOULDER_HEIGHT), (0, 0, 0)
+    for i in range(7):
+        alpha, a, d = WAM_DH[i]
+        R = _rx(alpha)
+        com = np.array([a, 0, d]) + R @ np.array(WAM_COMS[i])
+        ixx, iyy, izz, ixy, ixz, iyz = WAM_INERTIAS[i]
+        Ic = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+        Iu = R @ Ic @ R.T
+        link = f"wam_link{i + 1}"
+        parts.append(_joint(f"wam_j{i + 1}", parent, link, xyz, rpy, WAM_LIMITS[i], WAM_EFFORT[i],
+                            WAM_VELOCITY[i]))
+        parts.append(f'  <link name="{link}">\n'
+                     + _inertial(WAM_MASSES[i], com, (Iu[0, 0], Iu[1, 1], Iu[2, 2], Iu[0, 1],
+                                                      Iu[0, 2], Iu[1, 2])) + '  </link>\n')
+        parent, xyz, rpy = link, (a, 0, d), (alpha, 0, 0)
+    # tool plate: DH frame 7 then alpha = +pi/2
+    parts.append(_joint("wam_flange_joint", parent, "wam_flange", xyz, (rpy[0] + np.pi / 2, 0, 0)))
+    parts.append('  <link name="wam_flange"/>\n</robot>\n')
+    return "".join(parts)
+
+
+def _cylinder_inertia(m, length, r, axis) -> tuple:
+    ia = 0.5 * m * r * r
+    it = m * (3 * r * r + length * length) / 12
+    d = [it, it, it]
+    d[axis] = ia
+    return (d[0], d[1], d[2], 0.0, 0.0, 0.0)
+
+
+def katana_urdf() -> str:
+    """URDF of the Katana 6M180 (five arm joints about z; katana_description's origins).
+
+    Centres of mass and inertias are estimates (solid cylinders of radius 3 cm along each
+    link, mass from the description); the gripper is rigid and lumped into link 5.
+    """
+    parts = ['<?xml version="1.0"?>\n<!-- generated by seds_casadi.robots.katana_urdf(); joint '
+             'origins, limits, efforts, velocities and masses: katana_description '
+             '(katana_300_6m180.urdf.xacro); centres of mass and inertias: estimated as solid '
+             'cylinders (radius 3 cm) along each link. -->\n<robot name="katana_6m180">\n',
+             '  <link name="katana_base">\n'
+             + _inertial(1.405, (0, 0, 0.1), _cylinder_inertia(1.405, 0.2, 0.06, 2))
+             + '  </link>\n']
+    lengths = [0.05, 0.19, 0.139, 0.1523, 0.15]
+    axes = [2, 0, 0, 0, 2]
+    parent = "katana_base"
+    for i, ((xyz, rpy), lim) in enumerate(zip(KATANA_ORIGINS, KATANA_LIMITS)):
+        link = f"katana_link{i + 1}"
+        parts.append(_joint(f"katana_j{i + 1}", parent, link, xyz, rpy, lim, KATANA_EFFORT[i],
+                            KATANA_VELOCITY[i]))
+        inertia = _cylinder_inertia(KATANA_MASSES[i], lengths[i], KATANA_RADIUS, axes[i])
+        parts.append(f'  <link name="{link}">\n' + _inertial(KATANA_MASSES[i], KATANA_COMS[i], inertia)
+                     + '  </link>\n')
+        parent = link
+    parts.append(_joint("katana_flange_joint", parent, "katana_flange", *KATANA_TOOL))
+    parts.append('  <link name="katana_flange"/>\n</robot>\n')
+    return "".join(parts)
