@@ -275,3 +275,17 @@ def test_approach_constraint_holds_after_fitting(curved_demos_3d):
         SEDS(2, approach_direction=[0.0, 0.0, 0.0]).fit(curved_demos_3d)
     with pytest.raises(ValueError, match="entries"):
         SEDS(2, approach_direction=[1.0, 0.0]).fit(curved_demos_3d)
+
+
+def test_predict_is_eq5_of_the_joint_gmm_checked_against_a_numpy_oracle(fitted):
+    """StableDS.predict (the CasADi expression, cancellation-free form) equals the general form
+    of Eq. 5 computed in numpy from the joint GMM, far from and close to the target."""
+    from oracles import seds_velocity
+
+    for (name, obj), model in fitted.items():
+        rng = np.random.default_rng(0)
+        X = model.target + rng.standard_normal((50, model.n_dims)) * np.r_[1e-6, 1.0, 10.0][
+            rng.integers(0, 3, 50)][:, None]
+        ref = seds_velocity(X, model.priors, model.means, model.covariances)
+        np.testing.assert_allclose(model.predict(X), ref, rtol=1e-6,
+                                   atol=1e-9 * np.abs(ref).max(), err_msg=f"{name} {obj}")

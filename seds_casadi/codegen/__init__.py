@@ -6,9 +6,10 @@ and numpy, and every other layer may use it.
 """
 
 from .cache import CompileError, cache_folder, compiler_available, shared_library
-from .functions import FastEvaluator, batch_evaluate, compile_functions
+from .functions import CachedFunctionMixin, FastEvaluator, batch_evaluate, compile_functions
 from .simd import SimdLoop, UnsupportedOperation, simd_source
 
-__all__ = ["compile_functions", "FastEvaluator", "batch_evaluate", "compiler_available",
+__all__ = ["compile_functions", "FastEvaluator", "batch_evaluate", "CachedFunctionMixin",
+           "compiler_available",
            "cache_folder", "shared_library", "CompileError", "SimdLoop", "UnsupportedOperation",
            "simd_source"]

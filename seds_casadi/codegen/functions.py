@@ -21,7 +21,7 @@ import numpy as np
 
 from .cache import CompileError, compiler_available, shared_library
 
-__all__ = ["compile_functions", "FastEvaluator", "batch_evaluate"]
+__all__ = ["compile_functions", "FastEvaluator", "batch_evaluate", "CachedFunctionMixin"]
 
 _LOG = logging.getLogger(__name__)
 _LOCK = threading.Lock()
@@ -132,3 +132,22 @@ def batch_evaluate(f: ca.Function, *columns: np.ndarray) -> list[np.ndarray]:
     """
     out = f.call([ca.DM(c) if np.ndim(c) else float(c) for c in columns])
     return [np.asarray(o).T.reshape(-1, f.size1_out(j)) for j, o in enumerate(out)]
+
+
+class CachedFunctionMixin:
+    """For model classes with a ``to_casadi()``: builds that Function once, on first use.
+
+    ``self._function()`` returns the cached Function; pickling drops it (it is rebuilt after
+    unpickling), so models still travel to worker processes.
+    """
+
+    def _function(self) -> ca.Function:
+        f = self.__dict__.get("_f")
+        if f is None:
+            f = self.__dict__["_f"] = self.to_casadi()
+        return f
+
+    def __getstate__(self) -> dict:
+        state = dict(self.__dict__)
+        state.pop("_f", None)
+        return state

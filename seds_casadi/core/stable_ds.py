@@ -24,7 +24,7 @@ import os
 import casadi as ca
 import numpy as np
 
-from ..codegen import batch_evaluate
+from ..codegen import CachedFunctionMixin, batch_evaluate
 from ._io import atomic_npz
 from .errors import ModelFileError, StabilityError
 from .gmm import responsibilities_sx
@@ -117,7 +117,7 @@ def certify(
             "f_target_norm": f_err}
 
 
-class StableDS:
+class StableDS(CachedFunctionMixin):
     """A globally asymptotically stable GMM dynamical system (Eq. 5-7), certified by Eq. 10.
 
     Parameters
@@ -200,17 +200,6 @@ class StableDS:
         F = batch_evaluate(self._function(), X2.T)[0]
         return F[0] if single else F
 
-    def _function(self) -> ca.Function:
-        f = self.__dict__.get("_f")
-        if f is None:
-            f = self.__dict__["_f"] = self.to_casadi()
-        return f
-
-    def __getstate__(self) -> dict:  # the cached CasADi Function is rebuilt after unpickling
-        state = dict(self.__dict__)
-        state.pop("_f", None)
-        return state
-
     def rollout(self, x0, dt: float, max_steps: int = 20000, tol: float | None = None,
                 method: str = "rk4") -> np.ndarray | list[np.ndarray]:
         """Integrate xdot = f(x) from one or several starts until they reach the target.
@@ -265,20 +254,27 @@ class StableDS:
         outs = [T[: (e if e >= 0 else len(T) - 1) + 1, i] for i, e in enumerate(end)]
         return outs[0] if single else outs
 
-    def to_casadi(self, name: str = "seds_f") -> ca.Function:
-        """Eq. 5 as a CasADi Function x (d,) -> f(x) (d,), for code generation or optimal control.
+    def velocity_sx(self, x) -> ca.SX:
+        """Eq. 5 as an SX expression of a symbolic point x (shape (d, 1)): the one definition.
 
-        f(x) = sum_k h^k(x) (mu_xdot^k + A_k (x - mu_x^k)), h^k of Eq. 6. This is the one
-        definition of Eq. 5 in the package: :meth:`predict` evaluates it.
+        f(x) = sum_k h^k(x) (mu_xdot^k + A_k (x - mu_x^k)), h^k of Eq. 6. The model is certified,
+        so Eq. 10a holds (mu_xdot^k = A_k (mu_x^k - x*)) and this is written as
+        f(x) = sum_k h^k(x) A_k (x - x*): equal, and free of cancellation near x*, where the
+        target field (Eq. 8) divides by ||f||.
         """
-        d, K = self.n_dims, self.n_components
-        x = ca.SX.sym("x", d)
+        d = self.n_dims
         h = responsibilities_sx(x, self.priors, self.means[:, :d], self.covariances[:, :d, :d])
+        e = x - ca.DM(self.target)
         f = ca.SX.zeros(d, 1)
-        for k in range(K):
-            lin = ca.DM(self.means[k, d:]) + ca.DM(self.A[k]) @ (x - ca.DM(self.means[k, :d]))
-            f = f + h[k] * lin
-        return ca.Function(name, [x], [f], ["x"], ["xdot"])
+        for k in range(self.n_components):
+            f = f + h[k] * (ca.DM(self.A[k]) @ e)
+        return f
+
+    def to_casadi(self, name: str = "seds_f") -> ca.Function:
+        """Eq. 5 (:meth:`velocity_sx`) as a CasADi Function x (d,) -> f(x) (d,), for code
+        generation or optimal control; :meth:`predict` evaluates it."""
+        x = ca.SX.sym("x", self.n_dims)
+        return ca.Function(name, [x], [self.velocity_sx(x)], ["x"], ["xdot"])
 
     # ------------------------------------------------------------ persistence
     def _checksum(self, info_json: str) -> str:

@@ -26,7 +26,7 @@ from collections.abc import Callable, Sequence
 import casadi as ca
 import numpy as np
 
-from ..codegen import batch_evaluate
+from ..codegen import CachedFunctionMixin, batch_evaluate
 from ..core._io import atomic_npz
 from ..core.demonstrations import Demonstrations
 from ..core.stable_ds import StableDS
@@ -68,7 +68,7 @@ def hitting_ds_sx(x, alpha, kappa, target_field: TargetField, strength: Strength
     return kappa * (R @ (strength.sx(y) * target_field.sx(y)))
 
 
-class HittingMotion:
+class HittingMotion(CachedFunctionMixin):
     """The steerable hitting DS of Eq. 14, from a target field and a strength factor.
 
     A fitted value: build one from its parts, learn one with :meth:`fit` (or
@@ -292,14 +292,3 @@ class HittingMotion:
         xdot = hitting_ds_sx(x, alpha, kappa, self.target_field, self.strength)
         return ca.Function(name, [x, alpha, kappa], [xdot], ["x", "alpha", "kappa"], ["xdot"])
 
-    def _function(self) -> ca.Function:
-        """:meth:`to_casadi`, built once per motion."""
-        f = self.__dict__.get("_f")
-        if f is None:
-            f = self.__dict__["_f"] = self.to_casadi()
-        return f
-
-    def __getstate__(self) -> dict:  # the cached CasADi Function is rebuilt after unpickling
-        state = dict(self.__dict__)
-        state.pop("_f", None)
-        return state

@@ -19,7 +19,7 @@ import casadi as ca
 import numpy as np
 
 from ..codegen import batch_evaluate
-from ..core.gmm import responsibilities, responsibilities_sx
+from ..core.gmm import responsibilities
 from ..core.stable_ds import StableDS
 from ._validation import as_points
 
@@ -30,23 +30,14 @@ TINY = 1e-200
 
 
 def certified_velocity_sx(y, ds: StableDS) -> ca.SX:
-    """f(y) = sum_k h^k(y) A_k (y - x*) of a certified model, as SX (shape (d, 1)).
-
-    This is Eq. 5 for a model that satisfies Eq. 10a (mu_xdot^k + A_k (x - mu_x^k) =
-    A_k (x - x*)), in the form without cancellation near x*, where Eq. 8 divides by ||f||.
+    """f(y) = sum_k h^k(y) A_k (y - x*) of a certified model (Eq. 5): :meth:`StableDS.velocity_sx`.
 
     Parameters
     ----------
     y : casadi.SX, shape (d, 1)
     ds : StableDS
     """
-    d = ds.n_dims
-    h = responsibilities_sx(y, ds.priors, ds.means[:, :d], ds.covariances[:, :d, :d])
-    e = y - ca.DM(ds.target)
-    f = ca.SX.zeros(d, 1)
-    for k in range(ds.n_components):
-        f = f + h[k] * (ca.DM(ds.A[k]) @ e)
-    return f
+    return ds.velocity_sx(y)
 
 
 def target_field_sx(y, ds: StableDS, hitting_direction) -> tuple[ca.SX, ca.SX]:
