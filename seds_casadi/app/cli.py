@@ -51,7 +51,7 @@ def _add_fit(sub) -> None:
 
     f = sub.add_parser("fit", help="fit a stable DS to demonstrations from a .npz or .csv file",
                        description="Fit SEDS to demonstrations (formats: see "
-                                   "seds_casadi.demonstrations) and write model.npz and "
+                                   "seds_casadi.core.demo_files) and write model.npz and "
                                    "streamlines.png to --out.")
     f.add_argument("demonstrations", help="path to a .npz or .csv demonstrations file")
     f.add_argument("--components", "-K", type=int, default=5, help="number of Gaussians [5]")

@@ -46,7 +46,7 @@ def open_executor(workers: int = 1, dask: str | None = None,
         try:
             from distributed import Client
         except ImportError:  # pragma: no cover - dask is a dependency
-            raise ValueError("--dask needs the 'distributed' package: pip install distributed") \
+            raise ValueError("--dask needs the 'distributed' package: pip install 'seds_casadi[dask]'") \
                 from None
         try:
             client = Client(dask, timeout=timeout)

@@ -139,7 +139,7 @@ def run_lasa(shapes=None, objectives=("direction",), protocols=PROTOCOLS, n_comp
         Show a progress bar.
     dask : str, optional
         Address of a Dask scheduler to run the fits on (see
-        :func:`seds_casadi.executors.open_executor`).
+        :func:`seds_casadi.app.executors.open_executor`).
         Show a progress bar.
 
     Returns

@@ -5,9 +5,9 @@ The problem (paper Section 4.1, Eq. 4-11; original objectives of Khansari-Zadeh 
     min_theta J(theta)   subject to Eq. 10 (a)-(e)
 
 is written symbolically in CasADi (SX) with the constraints satisfied by construction (see
-:mod:`seds_casadi.parametrization`) and solved by IPOPT with exact gradients and exact Hessians
+:mod:`seds_casadi.core.parametrization`) and solved by IPOPT with exact gradients and exact Hessians
 from algorithmic differentiation. After every solve the model is certified numerically
-(:func:`seds_casadi.stable_ds.certify`); a model that fails is never returned.
+(:func:`seds_casadi.core.stable_ds.certify`); a model that fails is never returned.
 """
 
 from __future__ import annotations
@@ -69,11 +69,11 @@ class SEDS(RegressorMixin, BaseEstimator):
         ``fit_info``.
     compile : bool, default True
         Compile the per-sample kernels to C when a C compiler is found (cached on disk; see
-        :mod:`seds_casadi.kernels`); otherwise CasADi's virtual machine evaluates them.
+        :mod:`seds_casadi.codegen`); otherwise CasADi's virtual machine evaluates them.
     approach_direction : array, shape (d,), optional
         If given, constrain the model so that this direction is the slowest way into the target,
         with motion across it at least ``approach_ratio`` times faster (an extension of the paper
-        for hitting motions; see :func:`seds_casadi.kernels.approach_constraints`).
+        for hitting motions; see :func:`seds_casadi.core.objectives.approach_constraints`).
     approach_ratio : float, default 4.0
     verbose : bool, default False
         Print IPOPT's iteration log.

@@ -48,7 +48,7 @@ class SwingResult:
     tick_us : array (n,)
         Wall time of each control tick [us] (the controller only, not the simulation).
     face_normal : array (3,)
-        The club face's normal at the hit (for :func:`seds_casadi.ball.impact`).
+        The club face's normal at the hit (for :func:`seds_casadi.minigolf.ball.impact`).
     effective_mass : float
         The arm's mass as the ball feels it at the face along its normal at the hit
         (:func:`~seds_casadi.robots.dynamics.effective_mass`; the impact model's club mass for
@@ -80,7 +80,7 @@ class SwingResult:
     @property
     def face_error_deg(self) -> float:
         """Horizontal angle between the club face's normal and the commanded direction at the
-        hit [deg]: where a flat face sends the ball (:func:`seds_casadi.ball.impact`)."""
+        hit [deg]: where a flat face sends the ball (:func:`seds_casadi.minigolf.ball.impact`)."""
         a, b = self.face_normal[:2], self.commanded[:2]
         c = a @ b / (np.linalg.norm(a) * np.linalg.norm(b))
         return float(np.degrees(np.arccos(np.clip(c, -1, 1))))
