@@ -33,7 +33,7 @@ ball0 = np.array([0.0, 0.0, 0.02135])
 hole0 = np.array([2.4, 0.0])
 
 
-def aim(ball, hole):
+def aim(t, ball, hole):
     """Straight at the hole (flat field): alpha turns psi* towards it."""
     return np.arctan2(hole[1] - ball[1], hole[0] - ball[0]) - np.arctan2(psi[1], psi[0]), 1.0
 

@@ -385,7 +385,22 @@ def test_perturbations_are_handed_out_in_time_order_and_checked():
 
 def test_rollout_refuses_an_unknown_perturbation(motion, demos):
     with pytest.raises(ValueError, match="unknown perturbation"):
-        motion.rollout(demos.positions[0][0], perturb=[{"t": 0.1, "hole": [2.4, 0.0]}])
+        motion.rollout(demos.positions[0][0], perturb=[{"t": 0.1, "wind": [2.4, 0.0]}])
+
+
+def test_rollout_and_swing_call_params_with_time_ball_and_hole(motion, demos):
+    """One callback signature: params(t, ball, hole) -> (alpha [rad], kappa), in the motion's
+    rollout as in the robot's swing; a hole moved mid-swing reaches the callback."""
+    seen = []
+
+    def params(t, ball, hole):
+        seen.append((t, None if hole is None else hole[1]))
+        return 0.05, 1.0
+
+    motion.rollout(demos.positions[0][0], params=params, hole=[2.4, 0.0],
+                   perturb=[{"t": 0.1, "hole": [2.4, 0.3]}])
+    assert seen[0] == (0.0, 0.0) and seen[-1][1] == pytest.approx(0.3)
+    assert all(b >= a for (a, _), (b, _) in zip(seen, seen[1:]))
 
 
 def test_a_kappa_change_mid_swing_takes_effect(motion, demos):

@@ -213,7 +213,7 @@ def test_hitting_parameters_follow_a_hole_moved_mid_swing(motion):
     psi = motion.hitting_direction
     seen = []
 
-    def aim(b, h):
+    def aim(t, b, h):
         seen.append(h[1])
         return np.arctan2(h[1] - b[1], h[0] - b[0]) - np.arctan2(psi[1], psi[0]), 1.0
 

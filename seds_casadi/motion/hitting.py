@@ -153,7 +153,8 @@ class HittingMotion(CachedFunctionMixin):
     def rollout(self, start, alpha: float = 0.0, kappa: float = 1.0, dt: float = 0.002,
                 ball=None, perturb: Sequence[dict] | None = None, max_time: float = 5.0,
                 rest_mode: str = "flat", rest_time: float = 0.5,
-                params: Callable | None = None, hit_radius: float = 0.02) -> RolloutResult:
+                params: Callable | None = None, hit_radius: float = 0.02,
+                hole=None) -> RolloutResult:
         """Integrate a swing from ``start`` until the club hits the ball, then rest.
 
         Parameters
@@ -168,21 +169,25 @@ class HittingMotion(CachedFunctionMixin):
             Ball position in the field frame (default: the origin).
         perturb : list of dict, optional
             Changes applied on the fly at given times, no re-planning: each dict has ``t`` [s]
-            and any of ``ball`` (new position), ``alpha``, ``kappa``.
+            and any of ``ball`` (new position), ``hole`` (new position, read by ``params``),
+            ``alpha``, ``kappa``.
         max_time : float
             Give up (no hit) after this time.
         rest_mode : {"flat", "arc"}
         rest_time : float
             How long to integrate the resting mode after the hit.
         params : callable, optional
-            ``params(t, ball) -> (alpha, kappa)`` evaluated every step (e.g. a hitting-parameter
-            model reacting to a moving hole); overrides alpha and kappa.
+            ``params(t, ball, hole) -> (alpha [rad], kappa)`` evaluated every step (e.g. a
+            hitting-parameter model reacting to a moving hole; the same signature as
+            :func:`seds_casadi.robots.simulate_swing`'s); overrides alpha and kappa.
         hit_radius : float
             The club hits the ball when it crosses the plane through the ball perpendicular to
             the commanded hitting direction within this distance [m] of the ball's centre.
+        hole : array, shape (2,) or (3,), optional
+            The hole, handed to ``params``.
         """
         return _rollout.rollout(self, start, alpha, kappa, dt, ball, perturb, max_time,
-                                rest_mode, rest_time, params, hit_radius)
+                                rest_mode, rest_time, params, hit_radius, hole)
 
     # ------------------------------------------------------------ persistence
     def save(self, folder: str | os.PathLike) -> None:

@@ -195,7 +195,8 @@ class _Track:
 def rollout(motion: HittingMotion, start, alpha: float = 0.0, kappa: float = 1.0,
             dt: float = 0.002, ball=None, perturb: Sequence[dict] | None = None,
             max_time: float = 5.0, rest_mode: str = "flat", rest_time: float = 0.5,
-            params: Callable | None = None, hit_radius: float = 0.02) -> RolloutResult:
+            params: Callable | None = None, hit_radius: float = 0.02,
+            hole=None) -> RolloutResult:
     """Integrate a swing of ``motion`` from ``start`` until the club hits the ball, then rest
     (explicit Euler at ``dt``); the parameters are those of :meth:`HittingMotion.rollout`."""
     x = as_points(start, 3, "start")[0][0].copy()
@@ -203,7 +204,8 @@ def rollout(motion: HittingMotion, start, alpha: float = 0.0, kappa: float = 1.0
     if not (np.isfinite(dt) and dt > 0):
         raise ValueError(f"dt must be positive, got {dt}")
     b = np.zeros(3) if ball is None else as_points(ball, 3, "ball")[0][0].copy()
-    events = Perturbations(perturb, ("ball", "alpha", "kappa"))
+    events = Perturbations(perturb, ("ball", "hole", "alpha", "kappa"))
+    hole = None if hole is None else np.asarray(hole, float).copy()
     check_rest_mode(rest_mode)
     if not (np.isfinite(hit_radius) and hit_radius > 0):
         raise ValueError(f"hit_radius must be positive, got {hit_radius}")
@@ -214,10 +216,12 @@ def rollout(motion: HittingMotion, start, alpha: float = 0.0, kappa: float = 1.0
         for e in events.due(t):
             if "ball" in e:
                 b = as_points(e["ball"], 3, "perturbation ball")[0][0].copy()
+            if "hole" in e:
+                hole = np.asarray(e["hole"], float).copy()
             if "alpha" in e or "kappa" in e:
                 alpha, kappa = check_alpha_kappa(e.get("alpha", alpha), e.get("kappa", kappa))
         if params is not None:
-            alpha, kappa = check_alpha_kappa(*params(t, b.copy()))
+            alpha, kappa = check_alpha_kappa(*params(t, b.copy(), hole))
         v = ds(x - b, alpha, kappa)
         track.add(t, x, v, b)
         psi = motion.commanded_direction(alpha)

@@ -184,8 +184,9 @@ def simulate_swing(robot: Robot, motion: HittingMotion, ball, alpha: float = 0.0
     hole : array, shape (2,) or (3,), optional
         The hole, read by ``params`` every tick.
     params : callable, optional
-        ``params(ball, hole) -> (alpha, kappa)``, evaluated every tick from the current ball
-        and hole (e.g. a hitting-parameter model on the situation hole - ball); overrides
+        ``params(t, ball, hole) -> (alpha [rad], kappa)``, the same signature as
+        :meth:`HittingMotion.rollout`'s, evaluated every tick from the current time, ball and
+        hole (e.g. a hitting-parameter model on the situation hole - ball); overrides
         ``alpha`` and ``kappa``.
     """
     ball = np.asarray(ball, float).copy()
@@ -193,7 +194,7 @@ def simulate_swing(robot: Robot, motion: HittingMotion, ball, alpha: float = 0.0
     robot.check_reach(ball)
     events = Perturbations(perturb, ("ball", "hole"))
     if params is not None:
-        alpha, kappa = (float(v) for v in params(ball, hole))
+        alpha, kappa = (float(v) for v in params(0.0, ball.copy(), hole))
     if start is None:
         start = rotation_z(alpha) @ np.array([-0.3, 0.0, 0.05])
     ctl = SwingController(robot, motion, period, gains, rest_mode)
@@ -210,7 +211,7 @@ def simulate_swing(robot: Robot, motion: HittingMotion, ball, alpha: float = 0.0
             if "hole" in e:
                 hole = np.asarray(e["hole"], float).copy()
         if params is not None and ctl.hit is None:
-            alpha, kappa = (float(v) for v in params(ball, hole))
+            alpha, kappa = (float(v) for v in params(t, ball.copy(), hole))
         had_hit = ctl.hit is not None
         t0 = time.perf_counter_ns()
         tau = ctl.tick(q, qd, ball, alpha, kappa, t)
