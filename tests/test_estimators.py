@@ -104,3 +104,9 @@ def test_bad_parameters_are_refused_in_fit_with_a_clear_message():
         bad.fit(S, Y)
     with pytest.raises(ValueError, match=r"shape \(n, 2\)"):
         GMRModel(2).fit(S, Y).predict(np.zeros((3, 3)))
+
+
+def test_seds_accepts_a_numpy_generator_as_random_state(spiral_demos):
+    a = SEDS(2, objective="mse", random_state=np.random.default_rng(7)).fit(spiral_demos).model_
+    b = SEDS(2, objective="mse", random_state=np.random.default_rng(7)).fit(spiral_demos).model_
+    np.testing.assert_array_equal(a.means, b.means)  # the same Generator state: the same fit

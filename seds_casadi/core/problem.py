@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
+from ._random import sklearn_random_state
 from .demonstrations import Demonstrations
 from .gmm import responsibilities
 from .objectives import SumKernels
@@ -151,7 +152,7 @@ def _initial_theta(
     K, d = layout.K, layout.d
     gm = GaussianMixture(
         n_components=K, covariance_type="full", init_params="kmeans", reg_covar=1e-6,
-        random_state=random_state, max_iter=200,
+        random_state=sklearn_random_state(random_state), max_iter=200,
     ).fit(np.hstack([X, Xd]))
     theta = np.zeros(layout.size)
     logits = np.log(np.maximum(gm.weights_, 1e-12))

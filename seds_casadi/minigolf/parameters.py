@@ -24,6 +24,7 @@ import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.utils.validation import check_is_fitted
 
+from ..core._random import sklearn_random_state
 from ..core.gmm import gmr_function, gmr_predict
 
 __all__ = ["GPRModel", "GMRModel", "make_model", "MODELS", "gpr_param_count",
@@ -52,13 +53,6 @@ def _check_xy(S, Y, min_samples: int, what: str):
     if S.shape[0] < min_samples:
         raise ValueError(f"{what} needs at least {min_samples} training points, got {S.shape[0]}")
     return S, Y
-
-
-def sklearn_random_state(random_state):
-    """An int, None or numpy Generator as a seed scikit-learn accepts (a Generator gives an int)."""
-    if isinstance(random_state, np.random.Generator):
-        return int(random_state.integers(2**31 - 1))
-    return random_state
 
 
 class GPRModel(RegressorMixin, BaseEstimator):

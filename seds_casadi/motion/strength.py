@@ -21,6 +21,7 @@ import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin
 
 from ..codegen import batch_evaluate
+from ..core._random import sklearn_random_state
 from ..core.gmm import gmr_sx
 from ._validation import as_points
 
@@ -179,7 +180,7 @@ class StrengthFactorLearner(RegressorMixin, BaseEstimator):
         data = np.column_stack([X, np.log(speeds)])
         gm = GaussianMixture(n_components=int(K), covariance_type="full",
                              reg_covar=float(self.reg_covar),
-                             random_state=self.random_state).fit(data)
+                             random_state=sklearn_random_state(self.random_state)).fit(data)
         self.factor_ = StrengthFactor(gm.weights_, gm.means_, gm.covariances_,
                                       log_range=(float(np.log(speeds.min())),
                                                  float(np.log(speeds.max()))))
