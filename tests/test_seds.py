@@ -289,3 +289,19 @@ def test_predict_is_eq5_of_the_joint_gmm_checked_against_a_numpy_oracle(fitted):
         ref = seds_velocity(X, model.priors, model.means, model.covariances)
         np.testing.assert_allclose(model.predict(X), ref, rtol=1e-6,
                                    atol=1e-9 * np.abs(ref).max(), err_msg=f"{name} {obj}")
+
+
+def test_rollout_reports_whether_it_reached_the_target(fitted):
+    model = fitted["spiral", "mse"]
+    starts = np.array([[2.0, 0.5], [1.5, 1.8]])
+    paths, info = model.rollout(starts, dt=0.05, return_info=True)
+    tol = 1e-3 * np.linalg.norm(starts - model.target, axis=1).max()  # the default
+    assert info["converged"].all() and np.all(info["final_distance"] < tol)
+    assert [len(p) - 1 for p in paths] == info["steps"].tolist()
+    with pytest.warns(ConvergenceWarning, match=r"2 of 2 rollout\(s\) did not reach the target"):
+        short, info = model.rollout(starts, dt=0.05, max_steps=3, return_info=True)
+    assert not info["converged"].any() and info["steps"].tolist() == [3, 3]
+    assert np.all(info["final_distance"] > 0.1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        model.rollout(starts, dt=0.05, max_steps=3, warn=False)  # asked to be quiet

@@ -20,13 +20,14 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import warnings
 
 import casadi as ca
 import numpy as np
 
 from ..codegen import CachedFunctionMixin, batch_evaluate
 from ._io import atomic_npz
-from .errors import ModelFileError, StabilityError
+from .errors import ConvergenceWarning, ModelFileError, StabilityError
 from .gmm import responsibilities_sx
 
 __all__ = ["StableDS", "certify"]
@@ -201,7 +202,7 @@ class StableDS(CachedFunctionMixin):
         return F[0] if single else F
 
     def rollout(self, x0, dt: float, max_steps: int = 20000, tol: float | None = None,
-                method: str = "rk4") -> np.ndarray | list[np.ndarray]:
+                method: str = "rk4", return_info: bool = False, warn: bool = True):
         """Integrate xdot = f(x) from one or several starts until they reach the target.
 
         Parameters
@@ -214,10 +215,18 @@ class StableDS(CachedFunctionMixin):
         tol : float, optional
             Stop a trajectory once ||x - x*|| < tol. Default: 1e-3 times the largest start distance.
         method : {"rk4", "euler"}
+        return_info : bool
+            Also return a dict: ``converged`` (bool per start), ``steps`` (steps taken per start)
+            and ``final_distance`` (||x - x*|| at the end of each trajectory).
+        warn : bool
+            Give a :class:`~seds_casadi.ConvergenceWarning` naming the starts that did not reach
+            the target within ``max_steps`` (a rollout never stops silently at its step limit).
 
         Returns
         -------
-        array, shape (T, d) for one start, or a list of such arrays (each ends when it converged)
+        paths : array, shape (T, d) for one start, or a list of such arrays (each ends when it
+            reached the target, or at ``max_steps``)
+        info : dict, only with ``return_info``
         """
         X, single = self._check_points(x0, "x0")
         if not (np.isfinite(dt) and dt > 0):
@@ -252,7 +261,17 @@ class StableDS(CachedFunctionMixin):
             done |= newly
         T = np.stack(traj)
         outs = [T[: (e if e >= 0 else len(T) - 1) + 1, i] for i, e in enumerate(end)]
-        return outs[0] if single else outs
+        info = {"converged": end >= 0, "steps": np.where(end >= 0, end, len(T) - 1),
+                "final_distance": np.linalg.norm(x - self.target, axis=1)}
+        if warn and not info["converged"].all():
+            bad = np.flatnonzero(~info["converged"])
+            warnings.warn(
+                f"{len(bad)} of {len(X)} rollout(s) did not reach the target (within {tol:.3g}) "
+                f"in {int(max_steps)} steps of {dt:g} s: start(s) {bad[:10].tolist()} end "
+                f"{info['final_distance'][bad].max():.3g} away; raise max_steps or dt, or check "
+                "the model's speed (fit_info['speed_factor'])", ConvergenceWarning, stacklevel=2)
+        paths = outs[0] if single else outs
+        return (paths, info) if return_info else paths
 
     def velocity_sx(self, x) -> ca.SX:
         """Eq. 5 as an SX expression of a symbolic point x (shape (d, 1)): the one definition.
