@@ -110,3 +110,24 @@ def test_seds_accepts_a_numpy_generator_as_random_state(spiral_demos):
     a = SEDS(2, objective="mse", random_state=np.random.default_rng(7)).fit(spiral_demos).model_
     b = SEDS(2, objective="mse", random_state=np.random.default_rng(7)).fit(spiral_demos).model_
     np.testing.assert_array_equal(a.means, b.means)  # the same Generator state: the same fit
+
+
+def test_bic_picks_the_number_of_clusters_of_a_known_mixture():
+    from seds_casadi.core.model_selection import bic_n_components
+
+    rng = np.random.default_rng(0)
+    centres = np.array([[0, 0, 0, 0], [6, 0, -3, 1], [0, 6, 2, -2]], float)
+    Z = np.concatenate([c + 0.5 * rng.standard_normal((150, 4)) for c in centres])
+    K, bic = bic_n_components(Z[:, :2], Z[:, 2:], max_components=6, random_state=0)
+    assert K == 3 and len(bic) == 6 and np.argmin(bic) == 2
+    with pytest.raises(ValueError, match="same shape"):
+        bic_n_components(Z[:, :2], Z[:10, 2:])
+
+
+def test_seds_with_bic_components_records_the_scores(spiral_demos):
+    learner = SEDS("bic", objective="mse", random_state=0).fit(spiral_demos)
+    info = learner.model_.fit_info
+    assert learner.n_components == "bic"  # the parameter is left as given
+    assert info["n_components"] == learner.model_.n_components == int(np.argmin(info["bic"])) + 1
+    with pytest.raises(TypeError, match="integer or 'bic'"):
+        SEDS("aic").fit(spiral_demos)

@@ -305,3 +305,22 @@ def test_rollout_reports_whether_it_reached_the_target(fitted):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         model.rollout(starts, dt=0.05, max_steps=3, warn=False)  # asked to be quiet
+
+
+def test_demonstrations_moving_away_from_the_target_are_refused_before_solving(spiral_demos):
+    reversed_demos = Demonstrations([p[::-1] for p in spiral_demos.positions], dt=0.05,
+                                    target=spiral_demos.target)
+    with pytest.raises(ValueError, match="point away from the target"):
+        SEDS(2, objective="mse").fit(reversed_demos)
+    Xs, Xd, _, _ = spiral_demos.stacked()
+    with pytest.raises(ValueError, match="reversed in time"):
+        SEDS(2, objective="mse").fit(Xs, -Xd)
+
+
+def test_demonstrations_that_end_far_from_the_target_give_a_warning(spiral_demos):
+    # the first part of each spiral, with the target where the full spiral ends
+    half = Demonstrations([p[:8] for p in spiral_demos.positions],
+                          velocities=[v[:8] for v in spiral_demos.velocities],
+                          target=spiral_demos.target)
+    with pytest.warns(ConvergenceWarning, match="end more than half their start distance"):
+        SEDS(1, objective="mse", random_state=0).fit(half)

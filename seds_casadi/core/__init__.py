@@ -9,11 +9,12 @@ package.
 from .datasets import LASA_SHAPES, LASA_SINGLE_SHAPES, load_lasa
 from .demonstrations import Demonstrations, load_demonstrations, save_demonstrations
 from .errors import ConvergenceWarning, ModelFileError, SEDSError, SolverError, StabilityError
+from .model_selection import bic_n_components
 from .seds import SEDS, SEDSProblem
 from .stable_ds import StableDS, certify
 
 __all__ = [
     "Demonstrations", "load_demonstrations", "save_demonstrations", "SEDS", "SEDSProblem",
     "StableDS", "certify", "load_lasa", "LASA_SHAPES", "LASA_SINGLE_SHAPES", "SEDSError",
-    "SolverError", "StabilityError", "ModelFileError", "ConvergenceWarning",
+    "SolverError", "StabilityError", "ModelFileError", "ConvergenceWarning", "bic_n_components",
 ]

@@ -209,6 +209,7 @@ def build_problem(demos: Demonstrations, n_components: int, objective: str,
     sv = float(np.sqrt(np.mean(np.sum(Xd**2, axis=1)) / d))
     if not (sx > 0 and sv > 0):
         raise ValueError("the demonstrations do not move away from the target; nothing to learn")
+    check_approach(demos, X, Xd)
     Xs, Xds = X / sx, Xd / sv
     if objective == "direction":
         w = direction_weights(phase, omega_lower, omega_upper)
@@ -233,6 +234,43 @@ def build_problem(demos: Demonstrations, n_components: int, objective: str,
         lbx=lbx, ubx=ubx, margin=stability_margin, kernels=kernels,
         objective_function=kernels.casadi_function(),
     )
+
+
+def check_approach(demos: Demonstrations, X: np.ndarray, Xd: np.ndarray) -> None:
+    """Refuse data a stable DS with this attractor cannot follow; warn about doubtful data.
+
+    SEDS learns motions that converge to the target x*. If the demonstrated velocities point away
+    from x* on average (mean cosine with x* - x below 0), the demonstrations are most likely
+    reversed in time, have the wrong velocity sign or the wrong target: a ``ValueError`` says so
+    (before any solve). A demonstration that ends more than half its start distance away from x*
+    gets a :class:`~seds_casadi.ConvergenceWarning` (the model will be pulled to x* anyway).
+    """
+    import warnings
+
+    from .errors import ConvergenceWarning
+
+    r, v = np.linalg.norm(X, axis=1), np.linalg.norm(Xd, axis=1)
+    ok = (r > 0) & (v > 0)
+    if ok.any():
+        cos = -np.sum(X[ok] * Xd[ok], axis=1) / (r[ok] * v[ok])
+        if float(np.mean(cos)) < 0.0:
+            raise ValueError(
+                f"the demonstrated velocities point away from the target on average (mean cosine "
+                f"with the direction to the target {np.mean(cos):.2f}; {np.mean(cos < 0):.0%} of "
+                "the samples move away): the demonstrations may be reversed in time, their "
+                f"velocities have the wrong sign, or the target {demos.target} is not where they "
+                "end. A SEDS model always converges to its target."
+            )
+    if getattr(demos, "_phase", None) is not None:
+        return  # samples without time order: no start or end to compare
+    far = [n for n, p in enumerate(demos.shifted_positions)
+           if np.linalg.norm(p[-1]) > 0.5 * np.linalg.norm(p[0])]
+    if far:
+        warnings.warn(
+            f"demonstration(s) {far[:10]} end more than half their start distance away from the "
+            f"target {demos.target}; the model will still converge there. Check the target (by "
+            "default the mean end point) or trim the demonstrations.", ConvergenceWarning,
+            stacklevel=4)
 
 
 def _bounds(layout: Layout) -> tuple[np.ndarray, np.ndarray]:

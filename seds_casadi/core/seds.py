@@ -21,6 +21,7 @@ from sklearn.base import BaseEstimator, RegressorMixin
 
 from .demonstrations import Demonstrations
 from .errors import ConvergenceWarning, SolverError
+from .model_selection import bic_n_components
 from .objectives import approach_constraints
 from .parametrization import OBJECTIVES
 from .problem import SEDSProblem, build_problem, direction_weights
@@ -38,8 +39,10 @@ class SEDS(RegressorMixin, BaseEstimator):
 
     Parameters
     ----------
-    n_components : int
-        Number K of Gaussians.
+    n_components : int or "bic", default 5
+        Number K of Gaussians; ``"bic"`` picks K in 1..15 by the BIC of a GMM on [x; xdot]
+        (:func:`~seds_casadi.core.model_selection.bic_n_components`, as SEDS and ds-opt do; the
+        scores are in ``fit_info["bic"]``). ``GridSearchCV`` over K is the held-out alternative.
     objective : {"direction", "mse", "likelihood"}, default "direction"
         ``"direction"``: the paper's Eq. 9 (weighted cosine between demonstrated and model
         velocities, weights of Eq. 11); ``"mse"`` and ``"likelihood"``: the original SEDS objectives
@@ -117,8 +120,10 @@ class SEDS(RegressorMixin, BaseEstimator):
     def _validated(self) -> dict:
         """The parameters checked and normalised (raises ValueError/TypeError with a remedy)."""
         K = self.n_components
-        if isinstance(K, bool) or not isinstance(K, (int, np.integer)):
-            raise TypeError(f"n_components must be an integer, got {K!r}")
+        if isinstance(K, str) and K == "bic":
+            K = 1  # resolved on the data in fit
+        elif isinstance(K, bool) or not isinstance(K, (int, np.integer)):
+            raise TypeError(f"n_components must be an integer or 'bic', got {K!r}")
         if K < 1:
             raise ValueError(f"n_components must be at least 1, got {K}")
         if self.objective not in OBJECTIVES:
@@ -149,11 +154,19 @@ class SEDS(RegressorMixin, BaseEstimator):
         return {"n_components": int(K), "max_iter": int(self.max_iter),
                 "tol_objective_change": float(toc) if toc else 1e20, "approach_direction": u}
 
-    def build_problem(self, demos: Demonstrations) -> SEDSProblem:
+    def build_problem(self, demos: Demonstrations, n_components: int | None = None
+                      ) -> SEDSProblem:
         """Scale the data, initialise by k-means + EM and build the CasADi problem (to solve,
-        or to inspect: objective, gradient and Hessian at any parameter vector)."""
-        self._validated()
-        return build_problem(demos, int(self.n_components), self.objective, self.omega_lower,
+        or to inspect: objective, gradient and Hessian at any parameter vector).
+
+        ``n_components`` overrides the learner's (needed when it is ``"bic"``)."""
+        params = self._validated()
+        K = params["n_components"] if n_components is None else int(n_components)
+        if n_components is None and isinstance(self.n_components, str) and \
+                isinstance(demos, Demonstrations):
+            Xs, Xd, _, _ = demos.stacked()
+            K = bic_n_components(Xs, Xd, random_state=self.random_state)[0]
+        return build_problem(demos, K, self.objective, self.omega_lower,
                              self.omega_upper, self.stability_margin, self.random_state,
                              self.compile)
 
@@ -188,7 +201,13 @@ class SEDS(RegressorMixin, BaseEstimator):
         """
         demos = _as_demonstrations(X, y, target)
         params = self._validated()
+        bic = None
+        if isinstance(self.n_components, str):
+            Xs, Xd, _, _ = demos.stacked()
+            params["n_components"], bic = bic_n_components(Xs, Xd, random_state=self.random_state)
         self.model_ = self._solve(demos, params)
+        if bic is not None:
+            self.model_.fit_info["bic"] = bic.tolist()
         self.fit_info_ = self.model_.fit_info
         self.n_features_in_ = demos.n_dims
         return self
@@ -249,7 +268,7 @@ class SEDS(RegressorMixin, BaseEstimator):
 
     def _solve(self, demos: Demonstrations, params: dict) -> StableDS:
         t0 = time.perf_counter()
-        prob = self.build_problem(demos)
+        prob = self.build_problem(demos, params["n_components"])
         theta_sym = ca.MX.sym("theta", prob.layout.size)
         objective = prob.kernels.nlp_objective()  # keep alive while the solver runs
         nlp = {"x": theta_sym, "f": objective(theta_sym)}
