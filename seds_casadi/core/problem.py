@@ -239,11 +239,14 @@ def build_problem(demos: Demonstrations, n_components: int, objective: str,
 def check_approach(demos: Demonstrations, X: np.ndarray, Xd: np.ndarray) -> None:
     """Refuse data a stable DS with this attractor cannot follow; warn about doubtful data.
 
-    SEDS learns motions that converge to the target x*. If the demonstrated velocities point away
-    from x* on average (mean cosine with x* - x below 0), the demonstrations are most likely
-    reversed in time, have the wrong velocity sign or the wrong target: a ``ValueError`` says so
-    (before any solve). A demonstration that ends more than half its start distance away from x*
-    gets a :class:`~seds_casadi.ConvergenceWarning` (the model will be pulled to x* anyway).
+    SEDS learns motions that converge to the target x*. A ``ValueError`` (before any solve) when
+    the data clearly run away from x*: every demonstration ends farther from x* than it starts
+    while the velocities point away from x* on average (for samples without time order: a mean
+    cosine with x* - x below -0.5). Typical causes: demonstrations reversed in time, velocities
+    with the wrong sign, or a wrong target. A :class:`~seds_casadi.ConvergenceWarning` when some
+    demonstrations end more than half their start distance from x*, or the velocities point away
+    from x* on average (a motion that first moves away, which SEDS's quadratic Lyapunov function
+    cannot follow well).
     """
     import warnings
 
@@ -251,26 +254,31 @@ def check_approach(demos: Demonstrations, X: np.ndarray, Xd: np.ndarray) -> None
 
     r, v = np.linalg.norm(X, axis=1), np.linalg.norm(Xd, axis=1)
     ok = (r > 0) & (v > 0)
-    if ok.any():
-        cos = -np.sum(X[ok] * Xd[ok], axis=1) / (r[ok] * v[ok])
-        if float(np.mean(cos)) < 0.0:
-            raise ValueError(
-                f"the demonstrated velocities point away from the target on average (mean cosine "
-                f"with the direction to the target {np.mean(cos):.2f}; {np.mean(cos < 0):.0%} of "
-                "the samples move away): the demonstrations may be reversed in time, their "
-                f"velocities have the wrong sign, or the target {demos.target} is not where they "
-                "end. A SEDS model always converges to its target."
-            )
-    if getattr(demos, "_phase", None) is not None:
-        return  # samples without time order: no start or end to compare
-    far = [n for n, p in enumerate(demos.shifted_positions)
-           if np.linalg.norm(p[-1]) > 0.5 * np.linalg.norm(p[0])]
-    if far:
-        warnings.warn(
-            f"demonstration(s) {far[:10]} end more than half their start distance away from the "
-            f"target {demos.target}; the model will still converge there. Check the target (by "
-            "default the mean end point) or trim the demonstrations.", ConvergenceWarning,
-            stacklevel=4)
+    mean_cos = float(np.mean(-np.sum(X[ok] * Xd[ok], axis=1) / (r[ok] * v[ok]))) if ok.any() \
+        else 1.0
+    ordered = getattr(demos, "_phase", None) is None
+    start = [np.linalg.norm(p[0]) for p in demos.shifted_positions]
+    end = [np.linalg.norm(p[-1]) for p in demos.shifted_positions]
+    away = all(e >= s0 for s0, e in zip(start, end)) if ordered else mean_cos < -0.5
+    problems = []
+    if ordered:
+        far = [n for n, (s0, e) in enumerate(zip(start, end)) if e > 0.5 * s0]
+        if far:
+            problems.append(f"demonstration(s) {far[:10]} end more than half their start "
+                            "distance away from the target")
+    if mean_cos < 0:
+        problems.append(f"the velocities point away from the target on average (mean cosine "
+                        f"with the direction to the target {mean_cos:.2f})")
+    if mean_cos < 0 and away:
+        raise ValueError(
+            f"the demonstrations run away from the target {demos.target}: "
+            + "; ".join(problems) + ". They may be reversed in time, their velocities may have "
+            "the wrong sign, or the target is not where they end. A SEDS model always "
+            "converges to its target.")
+    if problems:
+        warnings.warn("; ".join(problems) + f" (target {demos.target}); the model will still "
+                      "converge to the target. Check the target (by default the mean end point) "
+                      "or trim the demonstrations.", ConvergenceWarning, stacklevel=4)
 
 
 def _bounds(layout: Layout) -> tuple[np.ndarray, np.ndarray]:
