@@ -66,6 +66,7 @@ SLOW_TESTS = {
     "test_the_teacher_keeps_to_direct_shots_unless_banks_are_allowed",
     "test_simd_backend_equals_the_casadi_kernel",
     "test_grid_search_picks_seds_components_by_demonstration_folds",
+    "test_a_many_component_fit_with_thin_components_is_certified",
 }
 
 

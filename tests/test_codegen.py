@@ -88,3 +88,32 @@ def test_batch_evaluate_maps_a_pointwise_function_over_columns():
     out, sq = batch_evaluate(f, X, 2.0)
     np.testing.assert_allclose(out, np.column_stack([2 * X[0], np.sin(X[1]), X[0]]))
     np.testing.assert_allclose(sq[:, 0], np.sum(X**2, axis=0))
+
+
+def test_a_compiler_never_outlives_the_process_that_started_it():
+    """Even a SIGKILL of the Python process (no handler runs) leaves no compiler behind: the
+    watchdog that leads the compiler's process group kills the group."""
+    marker = "47.1828"
+    code = ("from seds_casadi.codegen.cache import _run_compiler\n"
+            f"_run_compiler(['sh', '-c', 'sleep {marker} & sleep {marker}'], timeout=600)\n")
+    proc = subprocess.Popen([sys.executable, "-c", code])
+    try:
+        deadline = time.time() + 20
+        while time.time() < deadline:  # wait until the fake compiler runs
+            if subprocess.run(["pgrep", "-f", f"sleep {marker}"], capture_output=True).stdout:
+                break
+            time.sleep(0.1)
+        else:
+            pytest.fail("the fake compiler never started")
+        proc.kill()
+        proc.wait()
+        deadline = time.time() + 5
+        while time.time() < deadline:
+            left = subprocess.run(["pgrep", "-f", f"sleep {marker}"], capture_output=True,
+                                  text=True).stdout.strip()
+            if not left:
+                break
+            time.sleep(0.2)
+        assert not left, "the compiler outlived the process that started it"
+    finally:
+        subprocess.run(["pkill", "-f", f"sleep {marker}"])

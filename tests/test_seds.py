@@ -330,3 +330,31 @@ def test_demonstrations_that_end_far_from_the_target_give_a_warning(spiral_demos
                           target=spiral_demos.target)
     with pytest.warns(ConvergenceWarning, match="end more than half their start distance"):
         SEDS(1, objective="mse", random_state=0).fit(half)
+
+
+
+def test_a_many_component_fit_with_thin_components_is_certified():
+    """K = 15 on smooth 3-D demonstrations gives components with ill-conditioned Sigma_x; the
+    model still satisfies Eq. 10a to the certificate's 1e-8 (it once failed with 5.8e-8)."""
+    rng = np.random.default_rng(11)
+    pos = []
+    for _ in range(4):
+        t = np.linspace(0, 2.0, 120)
+        s = 0.5 - 0.5 * np.cos(np.pi * t / 2.0)
+        start = np.array([0.4, -0.2, 0.3]) + 0.05 * rng.standard_normal(3)
+        pos.append(np.round(start[None] * (1 - s[:, None])
+                            + 0.15 * np.sin(np.pi * s)[:, None] * np.array([0, 1, 0.5]), 6))
+    demos = Demonstrations(pos, dt=2.0 / 119)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        model = SEDS(15, random_state=0).fit(demos).model_
+    assert model.fit_info["hessian"] == "limited-memory"  # 284 parameters: "auto" chose L-BFGS
+    certify(model.priors, model.means, model.covariances, model.target)  # (a) to 1e-8
+    d = model.n_dims
+    conds = [np.linalg.cond(c[:d, :d]) for c in model.covariances]
+    assert max(conds) > 1e6  # the case this test is about: thin components
+    for k in range(model.n_components):
+        assert np.linalg.eigvalsh(model.A[k] + model.A[k].T).max() < 0          # (b)
+        assert np.linalg.eigvalsh(model.covariances[k]).min() > 0               # (c)
+    assert np.all(model.priors > 0) and np.sum(model.priors) == pytest.approx(1.0, abs=1e-12)
+    np.testing.assert_allclose(model.predict(model.target), 0.0, atol=1e-9)     # f(x*) = 0

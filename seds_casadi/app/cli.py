@@ -38,7 +38,7 @@ def build_parser() -> argparse.ArgumentParser:
     quiet = argparse.ArgumentParser(add_help=False)
     quiet.add_argument("--quiet", "-q", action="store_true",
                        help="print only warnings and errors, not the progress")
-    _add_fit(sub)
+    _add_fit(sub, quiet)
     _add_lasa(sub)
     _add_table1(sub, quiet)
     _add_validate(sub, quiet)
@@ -46,15 +46,26 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-def _add_fit(sub) -> None:
+def _components(text: str) -> int | str:
+    if text == "bic":
+        return text
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer or 'bic', got {text!r}") from None
+
+
+def _add_fit(sub, quiet) -> None:
     from ..core.parametrization import OBJECTIVES
 
     f = sub.add_parser("fit", help="fit a stable DS to demonstrations from a .npz or .csv file",
+                       parents=[quiet],
                        description="Fit SEDS to demonstrations (formats: see "
                                    "seds_casadi.core.demo_files) and write model.npz and "
-                                   "streamlines.png to --out.")
+                                   "streamlines.png to --out. Shows the solver's progress.")
     f.add_argument("demonstrations", help="path to a .npz or .csv demonstrations file")
-    f.add_argument("--components", "-K", type=int, default=5, help="number of Gaussians [5]")
+    f.add_argument("--components", "-K", type=_components, default=5,
+                   help="number of Gaussians, or 'bic' to choose it by BIC [5]")
     f.add_argument("--objective", choices=OBJECTIVES, default="direction",
                    help="objective [direction]")
     f.add_argument("--dt", type=float, default=None,
@@ -172,7 +183,7 @@ def _cmd_fit(a) -> int:
     repro = model.rollout(starts, dt=demos.estimated_dt(), tol=1e-3 * span, max_steps=20000)
     fig, ax = _plt().subplots(figsize=(5.5, 5))
     plot_streamlines(model, demos, repro, ax=ax,
-                     title=f"SEDS ({a.objective}, K={a.components})")
+                     title=f"SEDS ({a.objective}, K={model.n_components})")
     save_figure(fig, os.path.join(a.out, "streamlines.png"))
     info = {k: model.fit_info[k] for k in ("status", "iterations", "objective", "seconds")}
     print(json.dumps(info, indent=1))
@@ -238,23 +249,31 @@ class _PlainHandler(logging.Handler):
 
 
 @contextlib.contextmanager
-def command_logging(quiet: bool = False) -> Iterator[None]:
-    """For the duration of a command: the commands' loggers (``seds_casadi.app.*``) print
-    their messages plainly, progress (INFO) on stdout, or with ``quiet`` only warnings and
-    errors (on stderr). The lower layers' loggers are left as they are (their warnings reach
-    stderr through Python's default handler)."""
-    log = logging.getLogger("seds_casadi.app")
+def command_logging(quiet: bool = False, names: tuple[str, ...] = ("seds_casadi.app",)
+                    ) -> Iterator[None]:
+    """For the duration of a command: the named loggers (default the commands' own,
+    ``seds_casadi.app.*``) print their messages plainly, progress (INFO) on stdout, or with
+    ``quiet`` only warnings and errors (on stderr). Other loggers are left as they are (their
+    warnings reach stderr through Python's default handler)."""
     handler = _PlainHandler()
-    saved = (log.level, log.propagate)
-    log.addHandler(handler)
-    log.setLevel(logging.WARNING if quiet else logging.INFO)
-    log.propagate = False
+    logs = [logging.getLogger(n) for n in names]
+    saved = [(log.level, log.propagate) for log in logs]
+    for log in logs:
+        log.addHandler(handler)
+        log.setLevel(logging.WARNING if quiet else logging.INFO)
+        log.propagate = False
     try:
         yield
     finally:
-        log.removeHandler(handler)
-        log.setLevel(saved[0])
-        log.propagate = saved[1]
+        for log, (level, propagate) in zip(logs, saved):
+            log.removeHandler(handler)
+            log.setLevel(level)
+            log.propagate = propagate
+
+
+#: loggers whose progress a command shows: ``fit`` also shows the solver's progress lines and
+#: the compiler's ("compiling ..."), which a first fit in a new dimension can take a while on
+_COMMAND_LOGGERS = {"fit": ("seds_casadi.app", "seds_casadi.core", "seds_casadi.codegen")}
 
 
 _COMMANDS = {"fit": _cmd_fit, "lasa": _cmd_lasa, "table1": _cmd_table1,
@@ -274,7 +293,8 @@ def main(argv: list[str] | None = None) -> int:
 
     warnings.simplefilter("always", ConvergenceWarning)
     try:
-        with command_logging(quiet=getattr(a, "quiet", False)):
+        with command_logging(quiet=getattr(a, "quiet", False),
+                             names=_COMMAND_LOGGERS.get(a.command, ("seds_casadi.app",))):
             return _COMMANDS[a.command](a)
     except (ValueError, TypeError, FileNotFoundError, SEDSError) as exc:
         print(f"seds-casadi {a.command}: error: {exc}", file=sys.stderr)

@@ -73,10 +73,27 @@ def _verified(lib: str) -> bool:
         return False
 
 
+#: a POSIX shell wrapper, leader of the compiler's process group: it runs the compiler and, if the
+#: Python process that started it goes away (killed by any signal, even SIGKILL), kills the whole
+#: group (compiler driver, cc1, as) within half a second
+_WATCHDOG = """
+"$@" &
+child=$!
+while kill -0 "$child" 2>/dev/null; do
+  if ! kill -0 "$SEDS_CASADI_PARENT" 2>/dev/null; then kill -KILL -$$; fi
+  sleep 0.5
+done
+wait "$child"
+"""
+
+
 def _run_compiler(cmd: list[str], timeout: float) -> None:
-    """Run the compiler in its own process group; kill the group on timeout or interruption."""
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            start_new_session=True)
+    """Run the compiler in its own process group under a watchdog; kill the group on timeout,
+    interruption, or the death of this process."""
+    env = dict(os.environ, SEDS_CASADI_PARENT=str(os.getpid()))
+    proc = subprocess.Popen(["sh", "-c", _WATCHDOG, "seds-casadi-cc", *cmd],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            start_new_session=True, env=env)
     try:
         _, err = proc.communicate(timeout=timeout)
     except BaseException as exc:  # timeout, KeyboardInterrupt, SystemExit: leave nothing behind

@@ -128,18 +128,22 @@ class SumKernels:
         W: J = (1/W) sum_i g_i.
     compile : bool
         Compile the kernels to C when a compiler is available.
+    hessian : bool
+        Build the exact per-sample Hessian kernel (not needed with IPOPT's L-BFGS).
     """
 
     def __init__(self, layout: Layout, objective: str, margin: float, X: np.ndarray,
-                 Xd: np.ndarray, coef: np.ndarray, norm: float, compile: bool = True) -> None:
+                 Xd: np.ndarray, coef: np.ndarray, norm: float, compile: bool = True,
+                 hessian: bool = True) -> None:
         g = sample_objective(layout, objective, margin)
         th, x, xd, c = g.sx_in()
         gv = g(th, x, xd, c)
         grad = ca.gradient(gv, th)
-        hess = ca.densify(ca.hessian(gv, th)[0])
         fg = ca.Function("g_grad", [th, x, xd, c], [gv, grad])
-        fh = ca.Function("g_hess", [th, x, xd, c], [hess])
-        funcs = [g, fg, fh]
+        funcs = [g, fg]
+        if hessian:  # its C grows as P^2 per sample: built only when IPOPT is to use it
+            hess = ca.densify(ca.hessian(gv, th)[0])
+            funcs.append(ca.Function("g_hess", [th, x, xd, c], [hess]))
         self.compiled = False
         if compile:
             compiled = compile_functions(funcs)
@@ -148,7 +152,7 @@ class SumKernels:
         n = X.shape[0]
         self._g = funcs[0].map("J_sum", "serial", n, [0], [0])
         self._fg = funcs[1].map("JG_sum", "serial", n, [0], [0, 1])
-        self._h = funcs[2].map("H_sum", "serial", n, [0], [0])
+        self._h = funcs[2].map("H_sum", "serial", n, [0], [0]) if hessian else None
         self._data = [ca.DM(X.T), ca.DM(Xd.T), ca.DM(np.asarray(coef, dtype=float)).T]
         self.norm = float(norm)
         self.size = layout.size
@@ -169,6 +173,8 @@ class SumKernels:
 
     def hessian(self, theta) -> np.ndarray:
         """Hess J(theta), shape (P, P)."""
+        if self._h is None:
+            raise ValueError("these kernels were built without the Hessian (limited-memory)")
         return np.asarray(self._h(theta, *self._data)) / self.norm
 
     def casadi_function(self) -> ca.Function:

@@ -19,7 +19,7 @@ from .gmm import responsibilities
 from .objectives import SumKernels
 from .parametrization import Layout, unpack_numpy
 
-__all__ = ["SEDSProblem", "build_problem", "direction_weights"]
+__all__ = ["SEDSProblem", "build_problem", "direction_weights", "hessian_strategy", "HESSIANS"]
 
 
 def direction_weights(phase: np.ndarray, omega_lower: float, omega_upper: float) -> np.ndarray:
@@ -61,6 +61,8 @@ class SEDSProblem:
         J, its exact gradient and Hessian (mapped per-sample CasADi kernels).
     objective_function : casadi.Function
         theta -> J(theta).
+    hessian : {"exact", "limited-memory"}
+        The second derivatives IPOPT uses (:func:`hessian_strategy`).
     """
 
     layout: Layout
@@ -77,6 +79,7 @@ class SEDSProblem:
     margin: float
     kernels: SumKernels = field(repr=False)
     objective_function: ca.Function = field(repr=False)
+    hessian: str = "exact"
 
     def speed_factor(self, theta: np.ndarray) -> float:
         """Least-squares speed calibration c* = sum_i f_i . xdot_i / sum_i ||f_i||^2 (> 0).
@@ -123,12 +126,16 @@ class SEDSProblem:
             Sx = p["Sx"][k] * sx**2
             mx = p["mu"][k] * sx
             means[k, :d] = mx + self.target
-            means[k, d:] = A @ mx
             covs[k, :d, :d] = Sx
             covs[k, d:, :d] = A @ Sx
             covs[k, :d, d:] = (A @ Sx).T
             covs[k, d:, d:] = A @ Sx @ A.T + Q[k] * sv**2
             covs[k] = 0.5 * (covs[k] + covs[k].T)
+            # Eq. 10a with the A_k that the model recovers from its covariances (Sigma_xdotx
+            # Sigma_x^-1, as StableDS and the certificate compute it): for a thin component the
+            # recovered A differs from the optimised one by cond(Sigma_x) eps
+            A_model = np.linalg.solve(covs[k, :d, :d].T, covs[k, d:, :d].T).T
+            means[k, d:] = A_model @ mx
         return p["priors"].copy(), means, covs
 
 
@@ -183,9 +190,9 @@ def _initial_theta(
 
 
 def build_problem(demos: Demonstrations, n_components: int, objective: str,
-              omega_lower: float = 1.0, omega_upper: float = 2.0,
-              stability_margin: float = 1e-3, random_state=None,
-              compile: bool = True) -> SEDSProblem:
+                  omega_lower: float = 1.0, omega_upper: float = 2.0,
+                  stability_margin: float = 1e-3, random_state=None,
+                  compile: bool = True, hessian: str = "auto") -> SEDSProblem:
     """Scale the data, initialise by k-means + EM and build the CasADi problem.
 
     Parameters are those of :class:`~seds_casadi.core.seds.SEDS` (already validated).
@@ -226,14 +233,32 @@ def build_problem(demos: Demonstrations, n_components: int, objective: str,
     else:
         coef = np.ones(len(Xs))
         norm = float(len(Xs))
+    strategy = hessian_strategy(hessian, layout.size)
     kernels = SumKernels(layout, objective, stability_margin, Xs, Xds, coef, norm,
-                         compile=compile)
+                         compile=compile, hessian=strategy == "exact")
     return SEDSProblem(
         layout=layout, objective=objective, X=Xs, Xd=Xds, weights=w,
         position_scale=sx, velocity_scale=sv, target=demos.target.copy(), theta0=theta0,
         lbx=lbx, ubx=ubx, margin=stability_margin, kernels=kernels,
-        objective_function=kernels.casadi_function(),
+        objective_function=kernels.casadi_function(), hessian=strategy,
     )
+
+
+#: Hessian options of the learner
+HESSIANS = ("auto", "exact", "limited-memory")
+#: "auto" uses the exact Hessian up to this many parameters. Its per-sample C kernel grows as
+#: P^2 (18k instructions at P = 49, 56k at P = 94, 1.4M at P = 424; 3-D K = 15 (P = 284) ran the
+#: C compiler for over 8 minutes and 10 GB); above, IPOPT's L-BFGS with exact gradients
+EXACT_HESSIAN_MAX_PARAMETERS = 120
+
+
+def hessian_strategy(requested: str, n_parameters: int) -> str:
+    """``"exact"`` or ``"limited-memory"`` for a request (``"auto"`` by problem size)."""
+    if requested not in HESSIANS:
+        raise ValueError(f"unknown hessian {requested!r}; valid: {', '.join(HESSIANS)}")
+    if requested != "auto":
+        return requested
+    return "exact" if n_parameters <= EXACT_HESSIAN_MAX_PARAMETERS else "limited-memory"
 
 
 def check_approach(demos: Demonstrations, X: np.ndarray, Xd: np.ndarray) -> None:

@@ -12,6 +12,7 @@ from algorithmic differentiation. After every solve the model is certified numer
 
 from __future__ import annotations
 
+import logging
 import time
 import warnings
 
@@ -24,13 +25,57 @@ from .errors import ConvergenceWarning, SolverError
 from .model_selection import bic_n_components
 from .objectives import approach_constraints
 from .parametrization import OBJECTIVES
-from .problem import SEDSProblem, build_problem, direction_weights
+from .problem import HESSIANS, SEDSProblem, build_problem, direction_weights
 from .stable_ds import StableDS
 
 __all__ = ["SEDS", "SEDSProblem", "direction_weights"]
 
+_LOG = logging.getLogger(__name__)
 _OK_STATUS = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
-_HESSIANS = ("exact", "limited-memory")
+#: seconds between two progress lines of a running fit (logging, INFO)
+PROGRESS_SECONDS = 2.0
+
+
+class _Progress(ca.Callback):
+    """IPOPT's iteration callback: a log line (INFO) at most every PROGRESS_SECONDS."""
+
+    def __init__(self, nx: int, ng: int, label: str) -> None:
+        ca.Callback.__init__(self)
+        self.nx, self.ng, self.label = nx, ng, label
+        self.iteration, self.t0 = 0, time.perf_counter()
+        self._last = self.t0
+        self.construct("seds_progress", {})
+
+    def get_n_in(self):
+        return ca.nlpsol_n_out()
+
+    def get_n_out(self):
+        return 1
+
+    def get_name_in(self, i):
+        return ca.nlpsol_out(i)
+
+    def get_name_out(self, i):
+        return "ret"
+
+    def get_sparsity_in(self, i):
+        name = ca.nlpsol_out(i)
+        if name == "f":
+            return ca.Sparsity.scalar()
+        if name in ("x", "lam_x"):
+            return ca.Sparsity.dense(self.nx)
+        if name in ("g", "lam_g"):
+            return ca.Sparsity.dense(self.ng)
+        return ca.Sparsity(0, 0)
+
+    def eval(self, arg):
+        self.iteration += 1
+        now = time.perf_counter()
+        if now - self._last >= PROGRESS_SECONDS:
+            self._last = now
+            _LOG.info("%s: iteration %d, objective %.6g, %.1f s", self.label, self.iteration,
+                      float(arg[1]), now - self.t0)
+        return [0]
 
 
 # ------------------------------------------------------------------ the learner
@@ -64,8 +109,11 @@ class SEDS(RegressorMixin, BaseEstimator):
         stayed below this for 5 iterations with a dual infeasibility below 1e-2, like SEDS's
         ``tol_stopping``. The direction objective has long flat valleys where IPOPT otherwise
         spends hundreds of iterations for gains below 1e-5. Use 0 to disable.
-    hessian : {"exact", "limited-memory"}, default "exact"
-        Exact Hessians by algorithmic differentiation, or IPOPT's L-BFGS approximation.
+    hessian : {"auto", "exact", "limited-memory"}, default "auto"
+        Exact Hessians by algorithmic differentiation, or IPOPT's L-BFGS approximation (with
+        exact gradients). ``"auto"``: exact up to 120 parameters (2-D up to K = 12, 3-D up to
+        K = 6), L-BFGS above, where the exact Hessian's C kernel takes minutes to compile.
+        ``fit_info["hessian"]`` says which was used.
     require_convergence : bool, default False
         If True, an IPOPT run that stops without converging raises :class:`SolverError`; if False
         it gives a :class:`ConvergenceWarning` and returns the (certified) model, with the status in
@@ -93,7 +141,7 @@ class SEDS(RegressorMixin, BaseEstimator):
         max_iter: int = 1000,
         tol: float = 1e-6,
         tol_objective_change: float = 1e-5,
-        hessian: str = "exact",
+        hessian: str = "auto",
         require_convergence: bool = False,
         compile: bool = True,
         approach_direction=None,
@@ -128,8 +176,8 @@ class SEDS(RegressorMixin, BaseEstimator):
             raise ValueError(f"n_components must be at least 1, got {K}")
         if self.objective not in OBJECTIVES:
             raise ValueError(f"unknown objective {self.objective!r}; valid: {', '.join(OBJECTIVES)}")
-        if self.hessian not in _HESSIANS:
-            raise ValueError(f"unknown hessian {self.hessian!r}; valid: {', '.join(_HESSIANS)}")
+        if self.hessian not in HESSIANS:
+            raise ValueError(f"unknown hessian {self.hessian!r}; valid: {', '.join(HESSIANS)}")
         for name in ("omega_lower", "omega_upper"):
             v = getattr(self, name)
             if not (np.isfinite(v) and v > 0):
@@ -168,7 +216,7 @@ class SEDS(RegressorMixin, BaseEstimator):
             K = bic_n_components(Xs, Xd, random_state=self.random_state)[0]
         return build_problem(demos, K, self.objective, self.omega_lower,
                              self.omega_upper, self.stability_margin, self.random_state,
-                             self.compile)
+                             self.compile, self.hessian)
 
     def fit(self, X, y=None, target=None) -> SEDS:
         """Learn a certified globally stable DS from demonstrations.
@@ -237,7 +285,7 @@ class SEDS(RegressorMixin, BaseEstimator):
             raise NotFittedError("this SEDS learner is not fitted yet: call fit(demos) first")
         return model
 
-    def _ipopt_options(self, params: dict) -> dict:
+    def _ipopt_options(self, params: dict, hessian: str) -> dict:
         return {
             "print_time": False,
             "ipopt.print_level": 5 if self.verbose else 0,
@@ -250,7 +298,7 @@ class SEDS(RegressorMixin, BaseEstimator):
             "ipopt.acceptable_tol": 1e-2,
             "ipopt.acceptable_obj_change_tol": params["tol_objective_change"],
             "ipopt.acceptable_iter": 5,
-            "ipopt.hessian_approximation": self.hessian,
+            "ipopt.hessian_approximation": hessian,
         }
 
     def _constraints(self, prob: SEDSProblem, params: dict, theta_sym) -> tuple[list, dict]:
@@ -275,7 +323,14 @@ class SEDS(RegressorMixin, BaseEstimator):
         g, bounds = self._constraints(prob, params, theta_sym)
         if g:
             nlp["g"] = ca.vertcat(*g)
-        solver = ca.nlpsol("seds", "ipopt", nlp, self._ipopt_options(params))
+        label = (f"SEDS fit ({self.objective}, K={prob.layout.K}, d={prob.layout.d}, "
+                 f"{prob.X.shape[0]} samples, {prob.layout.size} parameters, "
+                 f"{prob.hessian} Hessian)")
+        _LOG.info("%s: solving with IPOPT (problem built in %.1f s)", label,
+                  time.perf_counter() - t0)
+        progress = _Progress(prob.layout.size, int(nlp["g"].numel()) if "g" in nlp else 0, label)
+        opts = dict(self._ipopt_options(params, prob.hessian), iteration_callback=progress)
+        solver = ca.nlpsol("seds", "ipopt", nlp, opts)
         t_built = time.perf_counter()
         res = solver(x0=prob.theta0, lbx=prob.lbx, ubx=prob.ubx, **bounds)
         stats = solver.stats()
@@ -292,6 +347,8 @@ class SEDS(RegressorMixin, BaseEstimator):
             warnings.warn(f"{msg} (status {status}); the model is certified stable but may fit "
                           "poorly. Raise max_iter or check the data.", ConvergenceWarning,
                           stacklevel=3)
+        _LOG.info("%s: %s after %d iterations, %.1f s", label, status,
+                  int(stats.get("iter_count", -1)), time.perf_counter() - t0)
         c = prob.speed_factor(theta) if self.objective == "direction" else 1.0
         priors, means, covs = prob.to_model_arrays(theta, speed_factor=c)
         info = {
@@ -301,7 +358,7 @@ class SEDS(RegressorMixin, BaseEstimator):
             "objective_name": self.objective, "seconds": time.perf_counter() - t0,
             "seconds_solve": time.perf_counter() - t_built, "n_parameters": prob.layout.size,
             "speed_factor": c, "n_components": params["n_components"],
-            "n_samples": int(prob.X.shape[0]), "hessian": self.hessian,
+            "n_samples": int(prob.X.shape[0]), "hessian": prob.hessian,
             "compiled_kernels": prob.kernels.compiled, "solver": "ipopt",
         }
         return StableDS(priors, means, covs, prob.target, fit_info=info, status=status)
