@@ -203,7 +203,30 @@ def test_motion_save_and_load_round_trip(motion, tmp_path):
     np.testing.assert_allclose(back.hitting_direction, motion.hitting_direction)
     assert back.hitting_speed == motion.hitting_speed
     (tmp_path / "m" / "strength.npz").write_bytes(b"broken")
-    with pytest.raises(ValueError, match="strength-factor file"):
+    with pytest.raises(ValueError, match="not a readable seds_casadi.StrengthFactor file"):
+        HittingMotion.load(tmp_path / "m")
+
+
+def test_an_edited_or_old_strength_file_is_refused(motion, tmp_path):
+    """The strength factor's file is guarded like the SEDS model's: an edit that would make
+    v* 150x faster, NaN priors, and a file from before the checksum are all refused."""
+    from seds_casadi.core.errors import ModelFileError
+
+    motion.save(tmp_path / "m")
+    path = tmp_path / "m" / "strength.npz"
+    with np.load(path, allow_pickle=False) as f:
+        data = {k: f[k] for k in f.files}
+    fast = dict(data, means=data["means"] + np.r_[0, 0, 0, np.log(150.0)])
+    np.savez(path, **fast)
+    with pytest.raises(ModelFileError, match="checksum mismatch"):
+        HittingMotion.load(tmp_path / "m")
+    np.savez(path, **dict(data, priors=np.full_like(data["priors"], np.nan)))
+    with pytest.raises(ModelFileError, match="'priors' holds NaN"):
+        HittingMotion.load(tmp_path / "m")
+    old = {k: data[k] for k in ("priors", "means", "covariances", "log_range", "approach",
+                                "rest_length")}
+    np.savez(path, **old)  # the unguarded layout of earlier versions
+    with pytest.raises(ModelFileError, match="missing entries.*save it again"):
         HittingMotion.load(tmp_path / "m")
 
 

@@ -164,18 +164,18 @@ def test_tampered_corrupt_and_unstable_files_are_refused(tmp_path, fitted):
     np.savez(tmp_path / "partial.npz", **partial)
     with pytest.raises(ModelFileError, match="missing"):
         StableDS.load(tmp_path / "partial.npz")
-    # unstable but with a valid checksum: re-certification refuses it
-    unstable = StableDS.__new__(StableDS)
-    unstable.priors, unstable.target = data["priors"], data["target"]
-    unstable.means = data["means"].copy()
-    unstable.covariances = data["covariances"].copy()
+    # unstable but with a valid checksum (recomputed as the writer does): re-certification
+    # refuses it
+    from seds_casadi.core.model_files import checksum
+
+    means, covs = data["means"].copy(), data["covariances"].copy()
     d = 2
-    unstable.covariances[0, d:, :d] *= -1  # flips A_0 to an unstable matrix
-    unstable.covariances[0, :d, d:] *= -1
-    unstable.means[0, d:] *= -1
+    covs[0, d:, :d] *= -1  # flips A_0 to an unstable matrix
+    covs[0, :d, d:] *= -1
+    means[0, d:] *= -1
     info = str(data["fit_info"])
-    bad = dict(data, covariances=unstable.covariances, means=unstable.means,
-               checksum=np.array(unstable._checksum(info)))
+    bad = dict(data, covariances=covs, means=means,
+               checksum=np.array(checksum([data["priors"], means, covs, data["target"]], info)))
     np.savez(tmp_path / "unstable.npz", **bad)
     with pytest.raises(StabilityError, match=r"\(b\)"):
         StableDS.load(tmp_path / "unstable.npz")

@@ -17,8 +17,6 @@ UTF-8 bytes of fit_info. ``load`` checks all of it and re-certifies stability.
 
 from __future__ import annotations
 
-import hashlib
-import json
 import os
 import warnings
 
@@ -26,14 +24,15 @@ import casadi as ca
 import numpy as np
 
 from ..codegen import CachedFunctionMixin, batch_evaluate
-from ._io import atomic_npz
 from .errors import ConvergenceWarning, ModelFileError, StabilityError
 from .gmm import responsibilities_sx
+from .model_files import read_guarded, write_guarded
 
 __all__ = ["StableDS", "certify"]
 
 FORMAT = "seds_casadi.StableDS"
 VERSION = 1
+_SCHEMA = {"priors": 1, "means": 2, "covariances": 3, "target": 1}
 
 
 def certify(
@@ -296,24 +295,13 @@ class StableDS(CachedFunctionMixin):
         return ca.Function(name, [x], [self.velocity_sx(x)], ["x"], ["xdot"])
 
     # ------------------------------------------------------------ persistence
-    def _checksum(self, info_json: str) -> str:
-        h = hashlib.sha256()
-        for a in (self.priors, self.means, self.covariances, self.target):
-            h.update(np.ascontiguousarray(a, dtype="<f8").tobytes())
-        h.update(info_json.encode("utf-8"))
-        return h.hexdigest()
-
     def save(self, path: str | os.PathLike) -> None:
-        """Write the model to ``path`` (``.npz``, format in the module docstring), atomically."""
-        path = os.fspath(path)
-        info_json = json.dumps(self.fit_info, sort_keys=True, default=_json_default)
-        arrays = {
-            "format": np.array(FORMAT), "version": np.array(VERSION),
-            "priors": self.priors, "means": self.means, "covariances": self.covariances,
-            "target": self.target, "fit_info": np.array(info_json),
-            "checksum": np.array(self._checksum(info_json)),
-        }
-        atomic_npz(path, **arrays)
+        """Write the model to ``path`` (``.npz``, the guarded format of
+        :mod:`seds_casadi.core.model_files`: checksum, no pickle), atomically."""
+        write_guarded(path, FORMAT, VERSION,
+                      {"priors": self.priors, "means": self.means,
+                       "covariances": self.covariances, "target": self.target},
+                      self.fit_info, meta_key="fit_info", json_default=_json_default)
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> StableDS:
@@ -326,44 +314,14 @@ class StableDS(CachedFunctionMixin):
         StabilityError
             The stored parameters violate Eq. 10.
         """
-        path = os.fspath(path)
+        arrays, info, _ = read_guarded(path, FORMAT, (VERSION,), _SCHEMA, meta_key="fit_info")
         try:
-            with np.load(path, allow_pickle=False) as f:
-                data = {k: f[k] for k in f.files}
-        except FileNotFoundError:
-            raise
-        except Exception as exc:  # noqa: BLE001 - any reader failure means a bad file
-            raise ModelFileError(f"{path}: not a readable model file ({exc})") from None
-        need = ("format", "version", "priors", "means", "covariances", "target", "fit_info",
-                "checksum")
-        missing = [k for k in need if k not in data]
-        if missing:
-            raise ModelFileError(f"{path}: missing entries {missing}; not a complete StableDS file")
-        if str(data["format"]) != FORMAT:
-            raise ModelFileError(f"{path}: format {str(data['format'])!r} is not {FORMAT!r}")
-        if int(data["version"]) != VERSION:
-            raise ModelFileError(f"{path}: version {int(data['version'])} is not supported "
-                                 f"(this library reads version {VERSION})")
-        for k in ("priors", "means", "covariances", "target"):
-            if data[k].dtype.kind != "f":
-                raise ModelFileError(f"{path}: entry {k!r} is not a float array")
-        info_json = str(data["fit_info"])
-        obj = cls.__new__(cls)
-        obj.priors, obj.means = data["priors"], data["means"]
-        obj.covariances, obj.target = data["covariances"], data["target"]
-        if obj._checksum(info_json) != str(data["checksum"]):
-            raise ModelFileError(f"{path}: checksum mismatch; the file is corrupt or was edited")
-        try:
-            info = json.loads(info_json)
-        except json.JSONDecodeError as exc:
-            raise ModelFileError(f"{path}: fit_info is not valid JSON ({exc})") from None
-        try:
-            return cls(data["priors"], data["means"], data["covariances"], data["target"],
-                       fit_info=info, status="loaded")
+            return cls(arrays["priors"], arrays["means"], arrays["covariances"],
+                       arrays["target"], fit_info=info, status="loaded")
         except StabilityError:
             raise
         except (ValueError, np.linalg.LinAlgError) as exc:
-            raise ModelFileError(f"{path}: inconsistent model arrays ({exc})") from None
+            raise ModelFileError(f"{os.fspath(path)}: inconsistent model arrays ({exc})") from None
 
     def __repr__(self) -> str:
         st = self.fit_info.get("status", "-")

@@ -27,8 +27,9 @@ import casadi as ca
 import numpy as np
 
 from ..codegen import CachedFunctionMixin, batch_evaluate
-from ..core._io import atomic_npz
 from ..core.demonstrations import Demonstrations
+from ..core.errors import ModelFileError
+from ..core.model_files import read_guarded, write_guarded
 from ..core.stable_ds import StableDS
 from . import rollout as _rollout
 from ._validation import as_points, check_alpha_kappa
@@ -44,6 +45,11 @@ from .target_field import TargetField
 __all__ = ["HittingMotion", "hitting_ds_sx", "TargetField", "StrengthFactor", "RolloutResult",
            "rotation_z", "approach_paths"]
 
+
+#: the ``format`` of a motion's ``strength.npz`` (the guarded format of core.model_files)
+STRENGTH_FORMAT = "seds_casadi.StrengthFactor"
+_STRENGTH_SCHEMA = {"priors": 1, "means": 2, "covariances": 3, "log_range": 1, "approach": 1,
+                    "rest_length": 0}
 
 def hitting_ds_sx(x, alpha, kappa, target_field: TargetField, strength: StrengthFactor) -> ca.SX:
     """Eq. 14 as SX: kappa R_alpha v(R_alpha^T x) h(R_alpha^T x).
@@ -198,27 +204,41 @@ class HittingMotion(CachedFunctionMixin):
         os.makedirs(folder, exist_ok=True)
         self.target_field.ds.save(os.path.join(folder, "stable_ds.npz"))
         s = self.strength
-        atomic_npz(os.path.join(folder, "strength.npz"), priors=s.priors, means=s.means,
-                   covariances=s.covariances, log_range=np.array(s.log_range),
-                   approach=np.asarray(self.target_field.approach, float),
-                   rest_length=np.array(self.rest_length))
+        write_guarded(os.path.join(folder, "strength.npz"), STRENGTH_FORMAT, 1,
+                      {"priors": s.priors, "means": s.means, "covariances": s.covariances,
+                       "log_range": np.array(s.log_range, float),
+                       "approach": np.asarray(self.target_field.approach, float),
+                       "rest_length": np.array(float(self.rest_length))})
 
     @classmethod
     def load(cls, folder: str | os.PathLike) -> HittingMotion:
-        """Read a motion written by :meth:`save` (the SEDS model is re-certified)."""
+        """Read a motion written by :meth:`save`: both files are checked (format, version,
+        checksum, types), the SEDS model is re-certified, and the strength factor's GMM and
+        ranges are validated; anything wrong raises :class:`~seds_casadi.ModelFileError`."""
         folder = os.fspath(folder)
         ds = StableDS.load(os.path.join(folder, "stable_ds.npz"))
         path = os.path.join(folder, "strength.npz")
+        a, _, _ = read_guarded(path, STRENGTH_FORMAT, (1,), _STRENGTH_SCHEMA)
+        d = ds.n_dims
+        K = len(a["priors"])
+        ok = (a["means"].shape == (K, d + 1) and a["covariances"].shape == (K, d + 1, d + 1)
+              and a["log_range"].shape == (2,) and a["approach"].shape in ((d,), (0,))
+              and a["rest_length"].shape == ())
+        if not ok:
+            raise ModelFileError(f"{path}: array shapes do not fit a {d}-D strength factor")
+        if np.any(a["priors"] <= 0) or abs(float(a["priors"].sum()) - 1.0) > 1e-9:
+            raise ModelFileError(f"{path}: the priors are not positive or do not sum to 1")
+        if not (a["log_range"][0] <= a["log_range"][1] and a["rest_length"] > 0):
+            raise ModelFileError(f"{path}: log_range or rest_length out of range")
         try:
-            with np.load(path, allow_pickle=False) as f:
-                strength = StrengthFactor(f["priors"], f["means"], f["covariances"],
-                                          tuple(f["log_range"]))
-                approach = f["approach"]
-                rest = float(f["rest_length"])
-        except (OSError, KeyError, ValueError) as exc:
-            raise ValueError(f"{path}: not a strength-factor file ({exc})") from None
-        return cls(TargetField(ds, approach=approach if approach.size == 3 else None),
-                   strength, rest)
+            for c in a["covariances"]:
+                np.linalg.cholesky(c)
+        except np.linalg.LinAlgError:
+            raise ModelFileError(f"{path}: a covariance is not positive definite") from None
+        strength = StrengthFactor(a["priors"], a["means"], a["covariances"],
+                                  tuple(a["log_range"]))
+        return cls(TargetField(ds, approach=a["approach"] if a["approach"].size == d else None),
+                   strength, float(a["rest_length"]))
 
     # ------------------------------------------------------------ evaluation
     def velocity(self, X, alpha: float = 0.0, kappa: float = 1.0) -> np.ndarray:
