@@ -247,9 +247,11 @@ def build_problem(demos: Demonstrations, n_components: int, objective: str,
 #: Hessian options of the learner
 HESSIANS = ("auto", "exact", "limited-memory")
 #: "auto" uses the exact Hessian up to this many parameters. Its per-sample C kernel grows as
-#: P^2 (18k instructions at P = 49, 56k at P = 94, 1.4M at P = 424; 3-D K = 15 (P = 284) ran the
-#: C compiler for over 8 minutes and 10 GB); above, IPOPT's L-BFGS with exact gradients
-EXACT_HESSIAN_MAX_PARAMETERS = 120
+#: P^2 (18k instructions at P = 49, 56k at P = 94, 1.4M at P = 424) and so does its compile time
+#: (2 cores under load: 7 s at P = 49, 24-29 s at P = 75-79, 56 s at P = 94, 111 s at P = 119;
+#: 3-D K = 15, P = 284, ran the compiler for over 8 minutes and 10 GB); above, IPOPT's L-BFGS
+#: with exact gradients
+EXACT_HESSIAN_MAX_PARAMETERS = 80
 
 
 def hessian_strategy(requested: str, n_parameters: int) -> str:

@@ -111,8 +111,10 @@ class SEDS(RegressorMixin, BaseEstimator):
         spends hundreds of iterations for gains below 1e-5. Use 0 to disable.
     hessian : {"auto", "exact", "limited-memory"}, default "auto"
         Exact Hessians by algorithmic differentiation, or IPOPT's L-BFGS approximation (with
-        exact gradients). ``"auto"``: exact up to 120 parameters (2-D up to K = 12, 3-D up to
-        K = 6), L-BFGS above, where the exact Hessian's C kernel takes minutes to compile.
+        exact gradients). ``"auto"``: exact up to 80 parameters (2-D up to K = 8, 3-D up to
+        K = 4; the hitting motion's K = 3), L-BFGS above, where the exact Hessian's C kernel
+        takes a minute or more to compile (its fits are less accurate: force ``"exact"`` when
+        time allows).
         ``fit_info["hessian"]`` says which was used.
     require_convergence : bool, default False
         If True, an IPOPT run that stops without converging raises :class:`SolverError`; if False
