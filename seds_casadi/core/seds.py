@@ -351,8 +351,14 @@ class SEDS(RegressorMixin, BaseEstimator):
                           stacklevel=3)
         _LOG.info("%s: %s after %d iterations, %.1f s", label, status,
                   int(stats.get("iter_count", -1)), time.perf_counter() - t0)
-        c = prob.speed_factor(theta) if self.objective == "direction" else 1.0
-        priors, means, covs = prob.to_model_arrays(theta, speed_factor=c)
+        try:
+            c = prob.speed_factor(theta) if self.objective == "direction" else 1.0
+            priors, means, covs = prob.to_model_arrays(theta, speed_factor=c)
+        except np.linalg.LinAlgError:
+            raise SolverError(
+                "the solution has a numerically singular covariance (a component collapsed "
+                f"onto a subspace of the {prob.layout.d}-D data); use fewer components, more or "
+                "less redundant data, or hessian='exact'", status) from None
         info = {
             "status": status, "success": converged,
             "iterations": int(stats.get("iter_count", -1)), "objective": J,
