@@ -67,6 +67,9 @@ SLOW_TESTS = {
     "test_simd_backend_equals_the_casadi_kernel",
     "test_grid_search_picks_seds_components_by_demonstration_folds",
     "test_a_many_component_fit_with_thin_components_is_certified",
+    "test_evaluate_shape_dsopt_scores_train_and_test_with_a_certified_model",
+    "test_cli_lasa_protocol_ds_opt_writes_the_csv_with_units",
+    "test_run_lasa_runs_ds_opt_beside_the_other_protocols",
 }
 
 

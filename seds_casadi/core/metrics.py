@@ -1,17 +1,26 @@
 """Accuracy metrics of the LASA evaluation protocol (LPV-DS evaluation, CoRL 2018).
 
-All functions take arrays of shape (n, d) and are vectorised.
+All functions take arrays of shape (n, d) and are vectorised. The published protocol's own
+definitions (nbfigueroa/ds-opt, commit 01072b6, 2018: ``utils/errror-estimation/rmse_error.m``,
+``edot_error.m``, ``thirdparty/dtwd/.../dtw.m`` and ``thirdparty/seds-stripped/SEDS_lib/
+Simulation.m``) are matched by :func:`velocity_rmse`, :func:`pointwise_direction_error` with
+``min_norm_product=0``, :func:`dtw_distance` and :func:`simulate_until_slow`.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["velocity_rmse", "direction_error", "dtw_distance", "swept_error_area"]
+__all__ = ["velocity_rmse", "direction_error", "pointwise_direction_error", "dtw_distance",
+           "swept_error_area", "simulate_until_slow", "reproduction_dtw"]
 
 
 def velocity_rmse(predicted: np.ndarray, demonstrated: np.ndarray) -> float:
     """Velocity RMSE: mean over points of sqrt((1/d) sum_j (xdot_hat_ij - xdot_ij)^2).
+
+    This is ds-opt's ``mean(rmse_error(...))``: ``rmse_error.m`` returns
+    ``sqrt(mean((xi_dot' - xi_dot_ref').^2, 2))``, one value per point, and the evaluation takes
+    the mean over all points of the set (not the root of the pooled mean square).
 
     Parameters
     ----------
@@ -33,10 +42,42 @@ def direction_error(predicted: np.ndarray, demonstrated: np.ndarray) -> float:
     return float(np.mean(np.abs(1.0 - cos)))
 
 
+def pointwise_direction_error(predicted: np.ndarray, demonstrated: np.ndarray,
+                              min_norm_product: float = 1e-10) -> np.ndarray:
+    """Direction error of each point: |1 - cos(xdot_hat_i, xdot_i)|.
+
+    A point where the product of the norms is at most ``min_norm_product``, or where the
+    cosine is not finite (NaN in either velocity), contributes 0. With the default 1e-10 the
+    mean of this is :func:`direction_error`; with ``min_norm_product=0`` it is ds-opt's
+    ``edot_error.m`` exactly, where 0/0 gives NaN and ``if isnan(...) ... = 0``.
+
+    Parameters
+    ----------
+    predicted, demonstrated : array, shape (n, d)
+    min_norm_product : float, default 1e-10
+        ``||xdot_hat_i|| ||xdot_i||`` at or below this counts as an undefined direction.
+
+    Returns
+    -------
+    array, shape (n,)
+        Values in [0, 2].
+    """
+    p, q = _pair(predicted, demonstrated)
+    if not (np.isfinite(min_norm_product) and min_norm_product >= 0):
+        raise ValueError(f"min_norm_product must be a finite number >= 0, got {min_norm_product}")
+    den = np.linalg.norm(p, axis=1) * np.linalg.norm(q, axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        cos = np.sum(p * q, axis=1) / den
+    ok = (den > min_norm_product) & np.isfinite(cos)
+    return np.where(ok, np.abs(1.0 - np.where(ok, cos, 1.0)), 0.0)
+
+
 def dtw_distance(s: np.ndarray, t: np.ndarray) -> float:
     """Dynamic time warping distance (unnormalised sum of Euclidean point distances).
 
-    D(i, j) = ||s_i - t_j|| + min(D(i-1, j), D(i, j-1), D(i-1, j-1)); returns D(n, m).
+    D(i, j) = ||s_i - t_j|| + min(D(i-1, j), D(i, j-1), D(i-1, j-1)); returns D(n, m). No
+    window: this is ds-opt's DTWD (``thirdparty/dtwd/dynamic_time_warping_v2.1/dtw.m`` by Quan
+    Wang, called with two arguments, so its window ``w = Inf``).
 
     Parameters
     ----------
@@ -80,6 +121,89 @@ def swept_error_area(reproduction: np.ndarray, demonstration: np.ndarray) -> flo
     ys = np.stack([a[:, 1], b[:, 1], c[:, 1], d[:, 1]], axis=1)
     area = 0.5 * np.abs(np.sum(xs * np.roll(ys, -1, axis=1) - ys * np.roll(xs, -1, axis=1), axis=1))
     return float(np.sum(area))
+
+
+def simulate_until_slow(field, starts: np.ndarray, dt: float = 0.01, speed_tol: float = 0.1,
+                        max_steps: int = 3000, window: int = 4) -> np.ndarray:
+    """Forward-Euler reproductions from several starts, integrated together until all are slow.
+
+    The reproduction rule of the published LASA evaluation (ds-opt's ``Simulation.m`` from the
+    SEDS library, called with ``dt = 0.01``, ``i_max = 3000``, ``tol = 0.1``): with
+    x_0 = the starts, v_i = f(x_i) and x_{i+1} = x_i + dt v_i, stop at the first step i >= 3
+    where every component of v_{i-3}, ..., v_i of *every* start is below ``speed_tol`` in
+    magnitude, or when i reaches ``max_steps - 2``; the point x_{i+1} just computed is dropped,
+    so the result holds x_0, ..., x_i (at most ``max_steps - 1`` points). The target is where
+    ``field`` vanishes (ds-opt passes x - x* with x* = 0 for LASA).
+
+    Parameters
+    ----------
+    field : callable
+        f(X) for an array X of shape (m, d), returning the velocities, shape (m, d).
+    starts : array, shape (m, d)
+    dt : float, default 0.01
+        Time step [s].
+    speed_tol : float, default 0.1
+        Per-component speed threshold (the data's units per second; mm/s for LASA).
+    max_steps : int, default 3000
+        ds-opt's ``i_max``.
+    window : int, default 4
+        Number of consecutive slow steps required (ds-opt: ``xd(:, end-3:end, :)``, 4).
+
+    Returns
+    -------
+    array, shape (T, m, d)
+        The positions; T is the same for every start.
+    """
+    x = np.atleast_2d(np.asarray(starts, dtype=float)).copy()
+    if not np.all(np.isfinite(x)):
+        raise ValueError("starts contain NaN or infinite values")
+    if not (np.isfinite(dt) and dt > 0):
+        raise ValueError(f"dt must be a positive time step, got {dt}")
+    if not (np.isfinite(speed_tol) and speed_tol > 0):
+        raise ValueError(f"speed_tol must be positive, got {speed_tol}")
+    window, max_steps = int(window), int(max_steps)
+    if window < 1:
+        raise ValueError(f"window must be at least 1, got {window}")
+    if max_steps < window + 1:
+        raise ValueError(f"max_steps must be at least window + 1 = {window + 1}, got {max_steps}")
+    traj = [x]
+    slow = []  # per step: every component of every start below speed_tol
+    i = 0
+    while True:
+        v = np.asarray(field(x), dtype=float).reshape(x.shape)
+        slow.append(bool(np.all(np.abs(v) < speed_tol)))
+        x = x + dt * v
+        if i >= window - 1 and (all(slow[-window:]) or i >= max_steps - 2):
+            break  # x (x_{i+1}) is not kept
+        traj.append(x)
+        i += 1
+    return np.stack(traj)
+
+
+def reproduction_dtw(field, starts: np.ndarray, references, **simulate_kw) -> np.ndarray:
+    """DTW distance of each reproduction to its reference trajectory (ds-opt's DTWD).
+
+    The starts are integrated together by :func:`simulate_until_slow` (keyword arguments go
+    there) and each reproduction is compared with its whole reference by :func:`dtw_distance`.
+
+    Parameters
+    ----------
+    field : callable
+        f(X), X of shape (m, d) -> velocities (m, d).
+    starts : array, shape (m, d)
+    references : sequence of m arrays, each shape (T_n, d)
+
+    Returns
+    -------
+    array, shape (m,)
+        The DTW distances (units of the positions; mm for LASA).
+    """
+    starts = np.atleast_2d(np.asarray(starts, dtype=float))
+    if len(references) != len(starts):
+        raise ValueError(f"{len(starts)} starts for {len(references)} reference trajectories; "
+                         "give one start per reference")
+    paths = simulate_until_slow(field, starts, **simulate_kw)
+    return np.array([dtw_distance(paths[:, n], ref) for n, ref in enumerate(references)])
 
 
 def _resample(x: np.ndarray, n: int) -> np.ndarray:
