@@ -77,6 +77,20 @@ def test_play_bad_input_is_a_clear_error(tmp_path):
     assert r.returncode == 2 and "no field 'moon'" in r.stderr
 
 
+def test_play_draws_its_shots_from_the_fields_declared_situations(tmp_path):
+    # a field of one's own with the ball fixed and the hole on a slider: every shot played is
+    # one of those situations (not a ball anywhere in the ball region, as before)
+    ridge = Path(__file__).resolve().parent / "fields" / "ridge.json"
+    res = play(PlayConfig(field=str(ridge), quick=True, learners=("gpr",), validate_shots=0,
+                          out=str(tmp_path / "r"), progress=False, train_size=10))
+    rows = res["rows"]
+    assert len(rows) == 3 and all(r["hit"] for r in rows)
+    assert all((r["ball_x_m"], r["ball_y_m"]) == (0.1, 0.0) for r in rows)
+    assert all(r["hole_x_m"] == pytest.approx(2.1) and -0.4 <= r["hole_y_m"] <= 0.4
+               for r in rows)
+    assert res["success"]["gpr"] >= 2 / 3
+
+
 def test_declared_situations_the_robot_cannot_reach_are_named_before_teaching(tmp_path):
     # a sinkhole 1 m deep in the middle of the ball region: the WAM beside the ball cannot
     # put its club there; play says so (which ball positions, what to change) and stops

@@ -5,6 +5,7 @@ import json
 import os
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -231,6 +232,31 @@ def test_progress_bars_stay_quiet_off_a_terminal_or_when_asked(capsys):
     f = load_field("double_hill")
     Teacher(f, STROKE, **COARSE).collect(*paper_situations(f, 3), progress=True)
     assert capsys.readouterr().err == ""
+
+
+OWN_FIELDS = Path(__file__).resolve().parent / "fields"
+
+
+@pytest.mark.parametrize("name", ["bowl", "tilted_plane", "ridge"])
+def test_fields_of_ones_own_are_taught_over_their_declaration_and_learned(name):
+    # three fields written from fields/README.md only: a bowl with no 'situations' (the
+    # default), a tilted plane with the hole anywhere in a region (minimal speed), a ridge
+    # with the hole on a slider (the centre of the success region)
+    f = load_field(OWN_FIELDS / f"{name}.json")
+    ds = collect_dataset(f, STROKE, **COARSE)
+    balls, holes = paper_situations(f)
+    np.testing.assert_array_equal(ds.ball, balls)
+    np.testing.assert_array_equal(ds.hole, holes)
+    assert ds.strategy == {"bowl": "centre", "tilted_plane": "minimal_speed",
+                           "ridge": "centre"}[name]
+    V = ds.stroke.launch_velocity(ds.alpha, ds.kappa)
+    r = simulate_shots(f, ds.ball, V, hole=ds.hole, engine="numpy")
+    assert r.sunk.all() and (r.wall_contacts == 0).all()
+    # one strategy across the data set: a smooth function of s that GPR learns from the
+    # equally spaced half (to a few tenths of a degree) and plays on fresh random situations
+    means, _ = run_table1({name: (f, ds)}, repetitions=1, seed=0)
+    spaced = next(m for m in means if m.model == "gpr" and "spaced" in m.training)
+    assert spaced.rmse_angle < 0.5 and spaced.success_rate >= 0.9
 
 
 def _values(rows):
