@@ -20,12 +20,7 @@ import numpy as np  # noqa: E402
 from seds_casadi.app.play import play_shot
 from seds_casadi.minigolf.fields import load_field
 from seds_casadi.minigolf.parameters import make_model
-from seds_casadi.minigolf.table1 import (
-    PAPER_TABLE1,
-    TRAINING_SETS,
-    _test_situations,
-    training_indices,
-)
+from seds_casadi.minigolf.table1 import PAPER_TABLE1, protocol, training_indices
 from seds_casadi.minigolf.teacher import Stroke, collect_dataset
 from seds_casadi.motion.hitting import HittingMotion
 from seds_casadi.motion.putting_demos import load_hitting_demos
@@ -58,13 +53,13 @@ for fname in fields:
     field = load_field(fname)
     data = collect_dataset(field, stroke, **({"resolution": (81, 26)} if args.quick else {}))
     S, Y = data.situations, data.outputs
-    for label, size, kind in TRAINING_SETS["fixed_speed"]:
+    for label, size, kind in protocol(field):
         stats = {m: {"rmse": [], "success": []} for m in ("gpr", "gmr")}
         for rep in range(reps):
             rng = np.random.default_rng([7, rep, size])
             idx = training_indices(S, size, kind, rng)
             test = np.setdiff1d(np.arange(len(data)), idx)
-            balls, holes = _test_situations(data, n_tests, rng)
+            balls, holes = field.situations.sample(n_tests, rng)
             for m in stats:
                 kw = {"random_state": rep} | ({} if m == "gpr" else {"n_components": 2})
                 model = make_model(m, **kw).fit(S[idx], Y[idx])

@@ -166,12 +166,69 @@ def test_heightmap_surface_matches_the_function_it_samples(tmp_path):
         (lambda s: s.update(stimp=20), "stimp"),
         (lambda s: s.update(ball_region=[-5, 0, 0, 0.1]), "ball_region"),
         (lambda s: s.update(boundary="moat"), "boundary"),
+        (lambda s: s.update(situations={"ball": {"circle": [0, 0]}}), r"situations\.ball: one of"),
+        (lambda s: s.update(situations={"hole": {"slider": [[2.4, 0.1], [2.4, 0.1]]}}),
+         "same point"),
+        (lambda s: s.update(situations={"hole": {"region": [2.0, 1.9, -0.2, 0.2]}}),
+         "min < max"),
+        (lambda s: s.update(situations={"ball": {"fixed": [0.5, 0.0]}}),
+         r"leaves the field's ball_region \[-0.1, 0.3, -0.45, 0.45\]"),
+        (lambda s: s.update(situations={"hole": {"slider": [[2.4, -0.58], [2.4, 0.2]]}}),
+         r"keep it within x -0.246..2.946, y -0.546..0.546"),
+        (lambda s: s.update(situations={"ball": {"fixed": [0.1, 0.0]}}),
+         "both fixed, which is a single situation"),
+        (lambda s: s.update(situations={"hole": {"region": [0.2, 0.4, -0.2, 0.2]}}),
+         "would lie in the hole"),
+        (lambda s: s.update(situations={"balls": {"fixed": [0.1, 0.0]}}), "unknown entry 'balls'"),
+        (lambda s: s.update(teacher={"strategy": "fastest"}), "valid: fixed_speed, minimal_speed"),
+        (lambda s: s.update(teacher={"kappa_range": [2.0, 1.0]}), r"teacher\.kappa_range"),
+        (lambda s: s.update(teacher={"speed": 1.0}), "unknown entry 'speed'"),
+        (lambda s: s.update(teacher={"banks": "yes"}), "true or false"),
     ],
 )
 def test_bad_field_files_name_the_entry(change, match):
     spec = json.loads(json.dumps(load_field("flat").spec))
     change(spec)
     with pytest.raises(ValueError, match=match):
+        Field.from_dict(spec)
+
+
+def test_declared_situations_placements_and_their_default():
+    flat = load_field("flat")
+    # no "situations" in the file: the ball anywhere in the ball region, the field's hole
+    sit = flat.situations
+    assert not sit.declared and sit.ball.kind == "region" and sit.hole.kind == "fixed"
+    assert sit.dim == 2 and "the default" in sit.describe()
+    np.testing.assert_array_equal(sit.ball.box, flat.ball_region)
+    rng = np.random.default_rng(0)
+    B, H = sit.sample(500, rng)
+    r = flat.ball_region
+    assert (B[:, 0] >= r[0]).all() and (B[:, 0] <= r[1]).all() and np.allclose(H, flat.hole)
+    assert (B[:, 1] >= r[2]).all() and (B[:, 1] <= r[3]).all() and np.ptp(B[:, 1]) > 0.8
+    # a slider: one-dimensional, equally spaced from end to end; a hole region with a fixed
+    # ball: two-dimensional
+    spec = json.loads(json.dumps(flat.spec))
+    spec["situations"] = {"ball": {"fixed": [0.1, 0.0]},
+                          "hole": {"slider": [[2.0, -0.3], [2.6, 0.3]]}}
+    sl = Field.from_dict(spec).situations
+    assert sl.dim == 1 and sl.declared
+    b, h = sl.design()
+    assert len(b) == 20 and np.allclose(b, [0.1, 0.0])
+    np.testing.assert_allclose(h[[0, -1]], [[2.0, -0.3], [2.6, 0.3]])
+    np.testing.assert_allclose(np.diff(h, axis=0), np.tile((h[-1] - h[0]) / 19, (19, 1)))
+    t = sl.sample(200, rng)[1]
+    assert np.allclose(t[:, 1] - t[:, 0], -2.3) and t[:, 0].min() >= 2.0 and t[:, 0].max() <= 2.6
+    # both moving is allowed on a plane (s alone says where the shot is played)
+    spec["situations"] = {"hole": {"region": [2.0, 2.6, -0.3, 0.3]}}
+    both = Field.from_dict(spec).situations
+    assert both.dim == 2 and both.ball.kind == "region"
+    b, h = both.design(56)
+    assert len(b) >= 56 and len({tuple(x) for x in np.round(h - b, 9)}) == len(b)
+    assert Field.from_dict({**spec, "situations": both.to_spec()}).situations.to_spec() == \
+        both.to_spec()
+    # ... but not on a curved surface
+    spec["surface"] = load_field("double_hill").spec["surface"]
+    with pytest.raises(ValueError, match="both the ball and the hole move"):
         Field.from_dict(spec)
 
 

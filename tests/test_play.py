@@ -1,6 +1,7 @@
 """The main job end to end: `seds-casadi play --quick` through the installed console script."""
 
 import csv
+import json
 import os
 import subprocess
 import sys
@@ -74,6 +75,37 @@ def test_play_bad_input_is_a_clear_error(tmp_path):
     assert r.returncode == 2 and "no motion" in r.stderr
     r = _run("play", "--quick", "--field", "moon", "--out", str(tmp_path / "z"))
     assert r.returncode == 2 and "no field 'moon'" in r.stderr
+
+
+def test_play_draws_its_shots_from_the_fields_declared_situations(tmp_path):
+    # a field of one's own with the ball fixed and the hole on a slider: every shot played is
+    # one of those situations (not a ball anywhere in the ball region, as before)
+    ridge = Path(__file__).resolve().parent / "fields" / "ridge.json"
+    res = play(PlayConfig(field=str(ridge), quick=True, learners=("gpr",), validate_shots=0,
+                          out=str(tmp_path / "r"), progress=False, train_size=10))
+    rows = res["rows"]
+    assert len(rows) == 3 and all(r["hit"] for r in rows)
+    assert all((r["ball_x_m"], r["ball_y_m"]) == (0.1, 0.0) for r in rows)
+    assert all(r["hole_x_m"] == pytest.approx(2.1) and -0.4 <= r["hole_y_m"] <= 0.4
+               for r in rows)
+    assert res["success"]["gpr"] >= 2 / 3
+
+
+def test_declared_situations_the_robot_cannot_reach_are_named_before_teaching(tmp_path):
+    # a sinkhole 1 m deep in the middle of the ball region: the WAM beside the ball cannot
+    # put its club there; play says so (which ball positions, what to change) and stops
+    spec = json.loads((Path(__file__).resolve().parents[1] / "fields" / "flat.json").read_text())
+    spec["surface"] = {"shape": "hills",
+                       "hills": [{"x": 0.1, "y": 0.0, "height": -1.0, "width": 0.15}]}
+    path = tmp_path / "sinkhole.json"
+    path.write_text(json.dumps(spec))
+    with pytest.raises(ValueError, match=r"the wam cannot play 1 of 9 declared ball positions "
+                                         r"on flat: ball \[0.1, 0.0\].*Declare situations it "
+                                         r"can reach") as err:
+        play(PlayConfig(field=str(path), quick=True, out=str(tmp_path / "o"),
+                        progress=False))
+    assert "cannot place the club head" in str(err.value)
+    assert not (tmp_path / "o" / "models" / "dataset_flat.npz").exists()
 
 
 def test_play_config_checks_its_values_and_takes_overrides():

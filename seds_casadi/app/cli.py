@@ -37,7 +37,8 @@ def build_parser() -> argparse.ArgumentParser:
     # options of the commands that report their progress through logging
     quiet = argparse.ArgumentParser(add_help=False)
     quiet.add_argument("--quiet", "-q", action="store_true",
-                       help="print only warnings and errors, not the progress")
+                       help="print only warnings and errors: no progress messages or bars "
+                            "(bars show only on a terminal anyway)")
     _add_fit(sub, quiet)
     _add_lasa(sub)
     _add_table1(sub, quiet)
@@ -182,6 +183,9 @@ def _add_play(sub, quiet) -> None:
     pl.add_argument("--workers", type=int, default=1, help="local worker processes [1]")
     pl.add_argument("--dask", default=None, metavar="ADDRESS",
                     help="play the shots on a Dask scheduler (tcp://host:8786)")
+    pl.add_argument("--train-size", type=int, default=None, metavar="N",
+                    help="train the learners on N equally spaced situations of the teacher's "
+                         "data set (as Table 1's equally spaced rows) [all]")
     pl.add_argument("--quick", action="store_true",
                     help="3 situations, a coarse teacher, 1 exudyn check: under a minute")
     pl.add_argument("--out", default="play_out", help="output folder [play_out]")
@@ -241,7 +245,7 @@ def _cmd_table1(a) -> int:
     table1_command(Table1Config(fields=tuple(a.field), repetitions=a.repetitions, seed=a.seed,
                                 out=a.out, workers=a.workers, dask=a.dask, quick=a.quick,
                                 demos=a.demos, figures=not a.no_figures,
-                                progress=sys.stderr.isatty()))
+                                progress=not a.quiet))
     return 0
 
 
@@ -249,7 +253,7 @@ def _cmd_validate(a) -> int:
     from .validate import ValidateConfig, validate
 
     validate(ValidateConfig(robot=a.robot, field=a.field, shots=a.shots, out=a.out, seed=a.seed,
-                            progress=sys.stderr.isatty()))
+                            progress=not a.quiet))
     return 0
 
 
@@ -259,7 +263,7 @@ def _cmd_play(a) -> int:
     play(PlayConfig(robot=a.robot, field=a.field, demos=a.demos, learners=tuple(a.learner),
                     shots=a.shots, seed=a.seed, out=a.out, models=a.models, quick=a.quick,
                     validate_shots=a.validate, workers=a.workers, dask=a.dask,
-                    progress=sys.stderr.isatty()))
+                    train_size=a.train_size, progress=not a.quiet))
     return 0
 
 

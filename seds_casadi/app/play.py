@@ -1,9 +1,13 @@
 """``seds-casadi play``: the whole pipeline end to end (paper Fig. 5).
 
 1. **Hitting motion**: SEDS + strength factor from the demonstrations (shipped putts by default).
-2. **Teacher**: good shots on the field's ball model (:mod:`seds_casadi.minigolf.teacher`).
-3. **Hitting parameters**: each learner (GPR, GMR) fitted on the teacher's data set.
-4. **A round**: shots from random ball and hole positions; for each shot and learner the
+2. **Teacher**: good shots on the field's ball model (:mod:`seds_casadi.minigolf.teacher`),
+   over the situations the field declares (:mod:`seds_casadi.minigolf.situations`); first the
+   robot is checked to reach the declared ball positions (:mod:`seds_casadi.app.reach`).
+3. **Hitting parameters**: each learner (GPR, GMR) fitted on the teacher's data set (all of it,
+   or ``train_size`` equally spaced situations, as one of Table 1's training sets).
+4. **A round**: random situations drawn from the field's declaration (the draw of Table 1's
+   success column); for each shot and learner the
    predicted (alpha, kappa) is executed by the 500 Hz controller on the simulated robot
    (Pinocchio) and the ball, launched by the club face as the robot holds it, rolls on the
    field's ball model. Shots are independent tasks: local processes or a Dask cluster.
@@ -25,7 +29,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..core._io import atomic_csv, atomic_text
+from ..minigolf._progress import progress_bar
 from ._config import names_tuple, whole_number, with_overrides
+from .reach import check_reach
 
 __all__ = ["play", "play_shot", "PlayConfig", "SHOT_COLUMNS", "LEARNERS"]
 
@@ -64,6 +70,9 @@ class PlayConfig:
         The ``models/`` folder of an earlier run to reuse (skips learning and teaching).
     quick : bool
         At most 3 situations, a coarse teacher and 1 exudyn check.
+    train_size : int or None
+        Train the learners on this many equally spaced situations of the teacher's data set
+        (Table 1's ``"equally spaced"`` kind); None: all of them.
     validate_shots : int
         Shots checked again in exudyn (0: none).
     workers : int
@@ -71,7 +80,7 @@ class PlayConfig:
     dask : str or None
         Address of a Dask scheduler (overrides ``workers``).
     progress : bool
-        Progress bars (on stderr).
+        Progress bars (on stderr, only on a terminal).
     """
 
     robot: str = "wam"
@@ -87,6 +96,7 @@ class PlayConfig:
     workers: int = 1
     dask: str | None = None
     progress: bool = True
+    train_size: int | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "learners", names_tuple("learner", self.learners,
@@ -96,6 +106,9 @@ class PlayConfig:
                            whole_number("validate_shots", self.validate_shots, 0))
         object.__setattr__(self, "workers", whole_number("workers", self.workers, 1))
         object.__setattr__(self, "seed", whole_number("seed", self.seed, 0))
+        if self.train_size is not None:
+            object.__setattr__(self, "train_size", whole_number("train_size", self.train_size,
+                                                                2))
 
     def effective(self) -> PlayConfig:
         """The settings actually played: ``quick`` caps the shots and the exudyn checks."""
@@ -154,17 +167,9 @@ def play_shot(task: dict) -> dict:
     return row
 
 
-def _situations(field, data, n: int, rng):
-    """Random balls in the field's ball region and holes where the teacher's data put them
-    (along the far edge, or the field's hole)."""
-    r = field.ball_region
-    balls = np.column_stack([rng.uniform(r[0], r[1], n), rng.uniform(r[2], r[3], n)])
-    if np.ptp(data.hole, axis=0).max() > 0:
-        lo, hi = data.hole.min(axis=0), data.hole.max(axis=0)
-        holes = lo + rng.uniform(size=(n, 2)) * (hi - lo)
-    else:
-        holes = np.tile(field.hole, (n, 1))
-    return balls, holes
+def _situations(field, n: int, rng):
+    """Random situations (balls, holes) drawn from the field's declaration."""
+    return field.situations.sample(n, rng)
 
 
 def _reuse_models(models: str, fld):
@@ -199,20 +204,41 @@ def _learn_and_teach(cfg: PlayConfig, fld, times: dict):
     _LOG.info("hitting motion: v* = %.3f m/s (%.1f s)", motion.hitting_speed,
               times["hitting motion (SEDS + GMR)"])
     t1 = time.perf_counter()
+    _check_declared_reach(cfg.robot, fld, motion)
     data = collect_dataset(fld, Stroke.from_motion(motion), progress=cfg.progress,
                            **({"resolution": (81, 26)} if cfg.quick else {}))
+
     times["teacher"] = time.perf_counter() - t1
     _LOG.info("teacher: %d good shots on %s (%.1f s)", len(data), fld.name, times["teacher"])
     return motion, data
 
 
-def _fit_learners(data, learners) -> dict:
-    """Step 3: each hitting-parameter learner on the teacher's data set."""
-    from ..minigolf.parameters import make_model
+def _check_declared_reach(robot: str, fld, motion) -> None:
+    """Before teaching: the robot reaches the declared ball positions (a 3 x 3 spread over a
+    region, the ends and middle of a slider), hitting straight at the declared holes."""
+    from ..minigolf.stroke import Stroke
 
-    k = 3 if data.strategy == "minimal_speed" else 2
-    return {m: make_model(m, **({} if m == "gpr" else {"n_components": k})).fit(
-        data.situations, data.outputs) for m in learners}
+    balls = fld.situations.ball.design(9)
+    holes = fld.situations.hole.design(3)
+    B = np.repeat(balls, len(holes), axis=0)
+    H = np.tile(holes, (len(balls), 1))
+    check_reach(robot, fld, B, Stroke.from_motion(motion).aim(H - B), motion.hitting_direction,
+                "declared ball positions")
+
+
+def _fit_learners(data, learners, train_size=None) -> dict:
+    """Step 3: each hitting-parameter learner on the teacher's data set (or ``train_size``
+    equally spaced situations of it)."""
+    from ..minigolf.parameters import make_model
+    from ..minigolf.table1 import N_COMPONENTS, training_indices
+
+    S, Y = data.situations, data.outputs
+    if train_size is not None and train_size < len(data):
+        idx = training_indices(S, train_size, "spaced", np.random.default_rng(0))
+        S, Y = S[idx], Y[idx]
+    k = N_COMPONENTS[Y.shape[1]]
+    return {m: make_model(m, **({} if m == "gpr" else {"n_components": k})).fit(S, Y)
+            for m in learners}
 
 
 def _round_tasks(cfg: PlayConfig, fld, data, fitted: dict, balls, holes,
@@ -236,11 +262,8 @@ def _play_round(cfg: PlayConfig, tasks: list[dict]) -> list[dict]:
 
     with open_executor(cfg.workers, cfg.dask) as ex:
         futures = [ex.submit(play_shot, t) for t in tasks]
-        it = futures
-        if cfg.progress:
-            from tqdm.auto import tqdm
-
-            it = tqdm(futures, desc=f"playing {len(tasks)} shots", unit="shot")
+        it = progress_bar(futures, cfg.progress, desc=f"playing {len(tasks)} shots",
+                          unit="shot")
         return [f.result() for f in it]
 
 
@@ -304,13 +327,15 @@ def play(config: PlayConfig | None = None, **overrides) -> dict:
     motion_dir = os.path.join(cfg.out, "models", "motion")
     motion, data = (_reuse_models(cfg.models, fld) if cfg.models
                     else _learn_and_teach(cfg, fld, times))
+    check_reach(cfg.robot, fld, data.ball, data.alpha, motion.hitting_direction,
+                "situations the teacher taught")
     motion.save(motion_dir)
     data.save(os.path.join(cfg.out, "models", f"dataset_{fld.name}.npz"))
     t2 = time.perf_counter()
-    fitted = _fit_learners(data, cfg.learners)
+    fitted = _fit_learners(data, cfg.learners, cfg.train_size)
     times["hitting-parameter models"] = time.perf_counter() - t2
     t3 = time.perf_counter()
-    balls, holes = _situations(fld, data, cfg.shots, rng)
+    balls, holes = _situations(fld, cfg.shots, rng)
     tasks = _round_tasks(cfg, fld, data, fitted, balls, holes, motion_dir)
     rows = _play_round(cfg, tasks)
     times["round (robot + ball model)"] = time.perf_counter() - t3

@@ -56,7 +56,7 @@ class Table1Config:
     figures : bool
         Write Fig. 10 and 11.
     progress : bool
-        Progress bars (on stderr).
+        Progress bars (on stderr, only on a terminal).
     """
 
     fields: tuple[str, ...] = TABLE1_FIELDS
@@ -83,18 +83,22 @@ class Table1Config:
 
 
 def fig10(field_name: str, ds: HittingDataset, n_train: int = 8, ax_row=None):
-    """Fig. 10: GPR and GMR fitted on the points around the centre of a 1-D data set."""
+    """Fig. 10: GPR and GMR fitted on the points around the centre of a data set along one
+    input dimension (the hole along a slider), over the input that varies most."""
+    S, Y = ds.situations, ds.outputs
+    column = int(np.argmax(np.ptp(S, axis=0)))
+    order = np.argsort(S[:, column], kind="stable")
     n = len(ds)
     lo = max(0, (n - n_train) // 2)
-    train = np.arange(lo, min(n, lo + n_train))
-    S, Y = ds.situations, ds.outputs
+    train = order[lo:min(n, lo + n_train)]
     models = {f"GPR ({field_name})": make_model("gpr").fit(S[train], Y[train]),
               f"GMR, K=2 ({field_name})": make_model("gmr", n_components=2).fit(S[train],
                                                                                 Y[train])}
     from .plotting import plot_regression_1d
 
-    return plot_regression_1d(S, Y[:, 0], train, models, ax_row=ax_row,
-                              xlabel="hole sideways from the ball, s_y [m]")
+    name = "sideways" if column == 1 else "ahead"
+    return plot_regression_1d(S, Y[:, 0], train, models, ax_row=ax_row, column=column,
+                              xlabel=f"hole {name} of the ball, s_{'xy'[column]} [m]")
 
 
 def fig11(ds: HittingDataset, n_components: int = 3, ax_row=None):
@@ -129,6 +133,7 @@ def _teach(cfg: Table1Config, fields: list, stroke) -> dict:
     datasets = {}
     for f in fields:
         t1 = time.perf_counter()
+        _LOG.info("situations on %s: %s", f.name, f.situations.describe())
         ds = collect_dataset(f, stroke, progress=cfg.progress, **teacher_kw)
         ds.save(os.path.join(cfg.out, "datasets", f"{f.name}.npz"))
         fixed = f", kappa {ds.kappa[0]:.3f}" if ds.strategy == "fixed_speed" else ""
@@ -139,13 +144,14 @@ def _teach(cfg: Table1Config, fields: list, stroke) -> dict:
 
 
 def _figures(datasets: dict, out: str) -> None:
-    """Fig. 10 on a one-output data set (the double hill's if there), Fig. 11 on a two-output
-    one."""
+    """Fig. 10 on a one-output data set along a slider (the double hill's if there), Fig. 11
+    on a two-output one."""
     from .plotting import _plt, save_figure
 
     plt = _plt()
-    one = [(n, ds) for n, (_, ds) in datasets.items() if ds.strategy == "fixed_speed"]
-    two = [ds for _, ds in datasets.values() if ds.strategy == "minimal_speed"]
+    one = [(n, ds) for n, (f, ds) in datasets.items()
+           if ds.outputs.shape[1] == 1 and f.situations.dim == 1]
+    two = [ds for _, ds in datasets.values() if ds.outputs.shape[1] == 2]
     if one:
         name, ds = next(((n, d) for n, d in one if n == "double_hill"), one[0])
         fig, axs = plt.subplots(1, 2, figsize=(10, 3.6), sharey=True)

@@ -14,9 +14,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..minigolf._progress import progress_bar
 from ..minigolf.ball import BALL_RADIUS
 from ..sim.shot import simulate_shot_exudyn
 from ._config import whole_number, with_overrides
+from .reach import check_reach
 
 __all__ = ["validate", "ValidateConfig", "VALIDATION_COLUMNS"]
 
@@ -46,7 +48,7 @@ class ValidateConfig:
         Output folder.
     seed : int
     progress : bool
-        A progress bar (on stderr).
+        Progress bars (on stderr, only on a terminal).
     """
 
     robot: str = "wam"
@@ -61,8 +63,9 @@ class ValidateConfig:
         object.__setattr__(self, "seed", whole_number("seed", self.seed, 0))
 
 
-def _learn(fld):
-    """The hitting motion, the teacher's data set for the field and GPR fitted on it."""
+def _learn(fld, robot: str, progress: bool):
+    """The hitting motion, the teacher's data set for the field (checked against the robot's
+    reach) and GPR fitted on it."""
     from ..minigolf.parameters import make_model
     from ..minigolf.teacher import Stroke, collect_dataset
     from ..motion.hitting import HittingMotion
@@ -70,21 +73,20 @@ def _learn(fld):
 
     t0 = time.perf_counter()
     motion = HittingMotion.fit(load_hitting_demos(), n_components=3)
-    data = collect_dataset(fld, Stroke.from_motion(motion), resolution=(121, 41))
+    data = collect_dataset(fld, Stroke.from_motion(motion), resolution=(121, 41),
+                           progress=progress)
+    check_reach(robot, fld, data.ball, data.alpha, motion.hitting_direction,
+                "situations the teacher taught")
     model = make_model("gpr").fit(data.situations, data.outputs)
     _LOG.info("hitting motion, teacher (%d good shots) and GPR: %.1f s", len(data),
               time.perf_counter() - t0)
     return motion, data, model
 
 
-def _situation(data, rng):
-    """A random hole in the range of the data set's holes, and a ball in the box of its balls
-    (or its one ball)."""
-    lo, hi = data.hole.min(axis=0), data.hole.max(axis=0)
-    hole = lo + rng.uniform(size=2) * (hi - lo)
-    ball = data.ball[0] if np.ptp(data.ball, axis=0).max() == 0 else \
-        data.ball.min(axis=0) + rng.uniform(size=2) * np.ptp(data.ball, axis=0)
-    return ball, hole
+def _situation(fld, rng):
+    """A random situation (ball, hole) drawn from the field's declaration."""
+    balls, holes = fld.situations.sample(1, rng)
+    return balls[0], holes[0]
 
 
 def _shot(cfg: ValidateConfig, fld, motion, model, data, ball, hole, i: int):
@@ -173,15 +175,12 @@ def validate(config: ValidateConfig | None = None, **overrides) -> list[dict]:
     fld = load_field(cfg.field)
     os.makedirs(cfg.out, exist_ok=True)
     rng = np.random.default_rng(cfg.seed)
-    motion, data, model = _learn(fld)
-    it = range(cfg.shots)
-    if cfg.progress:
-        from tqdm.auto import tqdm
-
-        it = tqdm(it, desc=f"validate {cfg.robot} on {fld.name}", unit="shot")
+    motion, data, model = _learn(fld, cfg.robot, cfg.progress)
+    it = progress_bar(range(cfg.shots), cfg.progress, desc=f"validate {cfg.robot} on "
+                      f"{fld.name}", unit="shot")
     rows, shots = [], []
     for i in it:
-        ball, hole = _situation(data, rng)
+        ball, hole = _situation(fld, rng)
         row, shot = _shot(cfg, fld, motion, model, data, ball, hole, i)
         rows.append(row)
         shots.append(shot)

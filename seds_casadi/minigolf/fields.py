@@ -1,4 +1,5 @@
-"""Minigolf fields: a surface z = H(x, y), a boundary, a hole, a ball region and a surface speed.
+"""Minigolf fields: a surface z = H(x, y), a boundary, a hole, a ball region, a surface speed,
+the situations played on it and how its teacher picks good shots.
 
 A field is one JSON file (``fields/*.json``; copy one to make your own)::
 
@@ -11,14 +12,36 @@ A field is one JSON file (``fields/*.json``; copy one to make your own)::
       "wall_restitution": 0.6,                   # walls only
       "hole": {"x": 2.5, "y": 0.0, "radius": 0.054},
       "ball_region": [xmin, xmax, ymin, ymax],   # where the ball may lie before a shot
-      "stimp": 10                                # surface speed (Stimpmeter, feet), or
-      "rolling_resistance": 0.0785               # rho directly (deceleration (5/7) rho g)
+      "stimp": 10,                               # surface speed (Stimpmeter, feet), or
+      "rolling_resistance": 0.0785,              # rho directly (deceleration (5/7) rho g)
+      "situations": {                            # optional: the situations played
+        "ball": {"fixed": [0.1, 0.0]},           # {"fixed": [x, y]}, {"region": [...]} or
+        "hole": {"slider": [[2.4, -0.42], [2.4, 0.42]]}   # {"slider": [[x0, y0], [x1, y1]]}
+      },
+      "teacher": {"strategy": "fixed_speed"}     # optional: how good shots are picked
     }
+
+**Situations** (``"situations"``, :mod:`seds_casadi.minigolf.situations`): where the ball may
+lie and where the hole may be, each a fixed point, a slider (a segment, e.g. the hole moved
+along the far edge as in the paper's Fig. 9 and 12) or a region. The situation the learners
+see is s = hole - ball. The teacher's data set, Table 1's test situations and the shots of
+``play`` and ``validate`` are all drawn from this one declaration. **Default** (files without
+the entry, and a missing ``ball`` or ``hole`` in it): the ball anywhere in ``ball_region``, the
+hole at ``hole``. A declared ball placement must lie inside ``ball_region``, a hole placement
+one hole radius inside the bounds; the ball and the hole may both move only on a plane.
+
+**Teacher** (``"teacher"``, all entries optional; see :class:`~seds_casadi.minigolf.teacher.
+Teacher`): ``strategy``, one of :data:`TEACHER_STRATEGIES` (``"fixed_speed"``: one speed gain
+for every situation, the hitting angle chosen; ``"minimal_speed"``: the slowest hits that sink,
+with a small margin; ``"centre"``: the hit farthest inside its success region; default
+``"centre"``), ``kappa`` (the fixed speed gain), ``alpha_range`` [deg] and ``kappa_range``
+(the search box) and ``banks`` (whether shots off a wall count, default false).
 
 Surface shapes (``"shape"`` and its parameters):
 
 * ``"plane"``: ``slope_x``, ``slope_y`` (dz/dx, dz/dy; 0 and 0 for the flat field);
-* ``"hills"``: ``hills``, a list of Gaussian hills ``height * exp(-|p - c|^2 / (2 width^2))``;
+* ``"hills"``: ``hills``, a list of Gaussian hills ``height * exp(-|p - c|^2 / (2 width^2))``
+  (a negative height makes a hollow);
 * ``"arctan"``: ``height * arctan(steepness * (y - y0)) / (pi/2)`` over the field, the paper's
   "scaled evaluation of the arctan function over a grid": a cross slope that bends the ball's path
   (``axis`` "y" or "x" chooses the direction it rises along);
@@ -44,12 +67,18 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core._io import data_folder
+from .situations import Situations
 from .surface import Surface
 
-__all__ = ["Field", "Surface", "load_field", "field_names", "FIELDS_FOLDER", "stimp_to_rho"]
+__all__ = ["Field", "Surface", "Situations", "load_field", "field_names", "FIELDS_FOLDER",
+           "stimp_to_rho", "TEACHER_STRATEGIES", "TEACHER_KEYS"]
 
 #: folder of the shipped field files (the repository's ``fields/``, installed as package data)
 FIELDS_FOLDER = data_folder("seds_casadi._fields")
+#: the teacher's strategies a field file may name (``"teacher": {"strategy": ...}``)
+TEACHER_STRATEGIES = ("fixed_speed", "minimal_speed", "centre")
+#: the entries of a field file's ``"teacher"``
+TEACHER_KEYS = ("strategy", "kappa", "alpha_range", "kappa_range", "banks")
 _STIMP = np.array([[6.0, 0.131], [8.0, 0.0985], [10.0, 0.0785], [12.0, 0.0655]])
 
 
@@ -78,6 +107,11 @@ class Field:
     ball_region : array, shape (4,)
     rolling_resistance : float
         rho; a rolling ball decelerates by (5/7) rho g.
+    wall_restitution : float
+    situations : Situations
+        Where the ball and the hole may be (the file's ``"situations"``, or the default).
+    teacher : dict
+        The file's ``"teacher"`` settings (validated; empty when the file has none).
     """
 
     name: str
@@ -90,6 +124,8 @@ class Field:
     rolling_resistance: float
     wall_restitution: float = 0.6
     spec: dict = field(default_factory=dict, repr=False)
+    situations: Situations | None = None
+    teacher: dict = field(default_factory=dict)
 
     @classmethod
     def from_dict(cls, spec: dict, source: str = "field") -> Field:
@@ -131,7 +167,11 @@ class Field:
         if not 0 <= e <= 1:
             raise ValueError(f"{source}: wall_restitution must be in [0, 1], got {e}")
         surface = Surface.from_spec(spec["surface"], list(bounds), f"{source}: surface")
-        return cls(str(spec["name"]), surface, bounds, boundary, hxy, hr, region, rho, e, spec)
+        situations = Situations.from_spec(spec.get("situations"), hxy, region, bounds, hr,
+                                          surface.shape, source)
+        teacher = _teacher_settings(spec.get("teacher", {}), f"{source}: teacher")
+        return cls(str(spec["name"]), surface, bounds, boundary, hxy, hr, region, rho, e, spec,
+                   situations, teacher)
 
     def check_situation(self, ball_xy) -> np.ndarray:
         """Validate ball positions (n, 2) against the ball region; returns them as an array."""
@@ -144,6 +184,40 @@ class Field:
             raise ValueError(f"ball position {list(B[np.argmax(bad)])} is outside the field's "
                              f"ball region {list(r)}")
         return B
+
+
+def _teacher_settings(t, where: str) -> dict:
+    """The ``"teacher"`` entry checked: known keys, a known strategy, a positive speed gain,
+    (low, high) ranges and a boolean ``banks``."""
+    if not isinstance(t, dict):
+        raise ValueError(f"{where}: an object is needed, got {t!r}")
+    unknown = sorted(set(t) - set(TEACHER_KEYS))
+    if unknown:
+        raise ValueError(f"{where}: unknown entry {unknown[0]!r}; valid: {', '.join(TEACHER_KEYS)}")
+    out = dict(t)
+    if "strategy" in t and t["strategy"] not in TEACHER_STRATEGIES:
+        raise ValueError(f"{where}.strategy: unknown strategy {t['strategy']!r}; valid: "
+                         f"{', '.join(TEACHER_STRATEGIES)}")
+    if "kappa" in t:
+        k = t["kappa"]
+        if isinstance(k, bool) or not isinstance(k, (int, float)) or not (np.isfinite(k) and k > 0):
+            raise ValueError(f"{where}.kappa: a positive speed gain is needed, got {k!r}")
+    for key in ("alpha_range", "kappa_range"):
+        if key in t:
+            try:
+                lo, hi = (float(v) for v in t[key])
+            except (TypeError, ValueError):
+                raise ValueError(f"{where}.{key}: [low, high] of numbers needed, got "
+                                 f"{t[key]!r}") from None
+            if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi) or (
+                    key == "kappa_range" and lo <= 0):
+                raise ValueError(f"{where}.{key}: [low, high] with low < high"
+                                 f"{' and low > 0' if key == 'kappa_range' else ''} needed, got "
+                                 f"{t[key]!r}")
+            out[key] = (lo, hi)
+    if "banks" in t and not isinstance(t["banks"], bool):
+        raise ValueError(f"{where}.banks: true or false, got {t['banks']!r}")
+    return out
 
 
 def _box(v, what) -> np.ndarray:

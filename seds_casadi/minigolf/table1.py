@@ -2,22 +2,26 @@
 
 Protocol (paper Section 7.2.1), for each field and training-set kind:
 
-1. The teacher's data set (:func:`seds_casadi.teacher.collect_dataset`): 20 situations along
-   one input dimension on rough flat and double hill (fixed speed: the models predict alpha),
-   56 on arctan (minimal speed: alpha and kappa).
+1. The teacher's data set (:func:`seds_casadi.minigolf.teacher.collect_dataset`) over the
+   situations the field declares: 20 along a one-dimensional situation space (the rough flat
+   and double hill fields: the hole moved along the far edge), 56 over a two-dimensional one
+   (arctan: the ball over its region). With a fixed speed the models predict alpha, else
+   alpha and kappa.
 2. A training set of the given kind is drawn: ``random`` (without replacement) or ``equally
-   spaced`` (every other point along the line; a checkerboard over the arctan grid).
-3. Each model (GPR, GMR, and on arctan the separate GMMs) is fitted on it; RMSE of alpha
-   [deg] (and of the hitting speed kappa v* [m/s] on arctan) on the remaining points.
-4. Success rate: 30 random situations in the range of the data set's inputs (hole along the
-   edge; ball over the grid's box), each model's prediction played on the ball model.
+   spaced`` (every other point along the line; a checkerboard over a grid). The kinds follow
+   the dimension of the situation space: 5 and 10 random and 10 equally spaced points in
+   one dimension, 16 random and 28 equally spaced in two.
+3. Each model (GPR, GMR, and with two outputs the separate GMMs) is fitted on it; RMSE of alpha
+   [deg] (and of the hitting speed kappa v* [m/s] with two outputs) on the remaining points.
+4. Success rate: 30 random situations drawn from the field's declaration (the same draw as
+   ``seds-casadi play``), each model's prediction played on the ball model.
 5. Steps 2-4 are repeated (100 times in the paper) and averaged.
 
-Fields of your own follow the protocol of their teacher's strategy. GMMs have 2 Gaussians on
-the one-output fields and 3 on arctan: the counts that give Table 1's
-"#" column (20; 45 joint, 60 separate). Repetitions are independent tasks with their own seeds
-(derived from the run's seed, the field, the training kind and the repetition number), so a
-run gives the same numbers on any executor: in this process, local processes or Dask.
+Fields of your own follow the same protocol. GMMs have 2 Gaussians with one output and 3 with
+two: the counts that give Table 1's "#" column (20; 45 joint, 60 separate). Repetitions are
+independent tasks with their own seeds (derived from the run's seed, the field, the training
+kind and the repetition number), so a run gives the same numbers on any executor: in this
+process, local processes or Dask.
 """
 
 from __future__ import annotations
@@ -29,25 +33,29 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core._io import atomic_csv
+from ._progress import progress_bar
 from .ball import simulate_shots
 from .fields import Field
 from .parameters import make_model
 from .teacher import HittingDataset
 
-__all__ = ["TRAINING_SETS", "MODELS_BY_STRATEGY", "PAPER_TABLE1", "TABLE1_FIELDS", "CSV_COLUMNS",
+__all__ = ["TRAINING_SETS", "MODELS_BY_OUTPUTS", "PAPER_TABLE1", "TABLE1_FIELDS", "CSV_COLUMNS",
            "run_table1", "format_table1", "write_table1_csv", "training_indices",
-           "Table1Row"]
+           "Table1Row", "protocol"]
 
 TABLE1_FIELDS = ("rough_flat", "double_hill", "arctan")
-#: Training sets by the data set's strategy: fixed speed (rough flat, double hill; and any
-#: field of your own taught that way) or minimal speed (arctan).
+#: Training sets (label, size, kind) by the dimension of the field's situation space: one
+#: (the hole along a slider: rough flat, double hill) or two (arctan, and the default
+#: declaration: the ball anywhere in its region)
 TRAINING_SETS = {
-    "fixed_speed": [("5 random", 5, "random"), ("10 random", 10, "random"),
-                    ("10 equally spaced", 10, "spaced")],
-    "minimal_speed": [("16 random", 16, "random"), ("28 equally spaced", 28, "spaced")],
+    1: [("5 random", 5, "random"), ("10 random", 10, "random"),
+        ("10 equally spaced", 10, "spaced")],
+    2: [("16 random", 16, "random"), ("28 equally spaced", 28, "spaced")],
 }
-MODELS_BY_STRATEGY = {"fixed_speed": ("gpr", "gmr"), "minimal_speed": ("gpr", "sep_gmr", "gmr")}
-N_COMPONENTS = {"fixed_speed": 2, "minimal_speed": 3}
+#: Models compared, by the number of outputs (alpha; or alpha and kappa)
+MODELS_BY_OUTPUTS = {1: ("gpr", "gmr"), 2: ("gpr", "sep_gmr", "gmr")}
+#: Gaussians of the GMMs, by the number of outputs
+N_COMPONENTS = {1: 2, 2: 3}
 N_TEST_SITUATIONS = 30
 #: columns of ``table1.csv``: the RMSE of the hitting angle [deg] and of the hitting speed
 #: kappa v* [m/s] (empty without a speed output), the success rate (a fraction) and the model's
@@ -108,14 +116,17 @@ def training_indices(situations: np.ndarray, size: int, kind: str,
         return np.sort(rng.choice(n, size, replace=False))
     if kind != "spaced":
         raise ValueError(f"training kind must be 'random' or 'spaced', got {kind!r}")
-    spread = np.ptp(situations, axis=0)
-    varying = np.flatnonzero(spread > 1e-9 * max(1.0, spread.max()))
-    if len(varying) <= 1:
-        order = np.argsort(situations[:, varying[0]] if len(varying) else np.arange(n),
-                           kind="stable")
+    centred = situations - situations.mean(axis=0)
+    _, sv, vt = np.linalg.svd(centred, full_matrices=False)
+    if sv[-1] <= 1e-9 * max(1.0, sv[0]):
+        # along a line (a slider): equally spaced along it, both ends included
+        order = np.argsort(centred @ vt[0], kind="stable")
         return np.sort(order[np.round(np.linspace(0, n - 1, size)).astype(int)])
+    values = [np.unique(np.round(situations[:, j], 9), return_inverse=True) for j in (0, 1)]
+    if len(values[0][0]) * len(values[1][0]) != n:
+        return _farthest_points(situations, size)
     # a grid: checkerboard of the grid coordinates, thinned or filled to ``size``
-    ranks = [np.unique(np.round(situations[:, j], 9), return_inverse=True)[1] for j in varying]
+    ranks = [inv for _, inv in values]
     board = np.flatnonzero((ranks[0] + ranks[1]) % 2 == 0)
     if len(board) >= size:
         return np.sort(board[np.round(np.linspace(0, len(board) - 1, size)).astype(int)])
@@ -124,19 +135,18 @@ def training_indices(situations: np.ndarray, size: int, kind: str,
     return np.sort(np.concatenate([board, extra]))
 
 
-def _test_situations(ds: HittingDataset, n: int, rng: np.random.Generator):
-    """Random situations in the range of the data set's inputs: where the data set moved the
-    hole, a hole in the range of its holes (ball fixed), else a ball in the box of its balls."""
-    hole_spread = np.ptp(ds.hole, axis=0)
-    if hole_spread.max() > 0:
-        lo, hi = ds.hole.min(axis=0), ds.hole.max(axis=0)
-        holes = lo + rng.uniform(size=(n, 2)) * (hi - lo)
-        balls = ds.ball[rng.integers(0, len(ds), n)]
-    else:
-        lo, hi = ds.ball.min(axis=0), ds.ball.max(axis=0)
-        balls = lo + rng.uniform(size=(n, 2)) * (hi - lo)
-        holes = np.tile(ds.hole[0], (n, 1))
-    return balls, holes
+def _farthest_points(S: np.ndarray, size: int) -> np.ndarray:
+    """``size`` points spread over scattered situations: greedy farthest-point selection in
+    coordinates scaled by their spread, from the point nearest the middle."""
+    spread = np.ptp(S, axis=0)
+    Z = (S - S.mean(axis=0)) / np.where(spread > 0, spread, 1.0)
+    chosen = [int(np.argmin(np.sum(Z * Z, axis=1)))]
+    d = np.sum((Z - Z[chosen[0]]) ** 2, axis=1)
+    while len(chosen) < size:
+        j = int(np.argmax(d))
+        chosen.append(j)
+        d = np.minimum(d, np.sum((Z - Z[j]) ** 2, axis=1))
+    return np.sort(chosen)
 
 
 def _repetition(task: dict) -> list[Table1Row]:
@@ -156,7 +166,7 @@ def _repetition_body(task: dict) -> list[Table1Row]:
     S, Y = ds.situations, ds.outputs
     idx = training_indices(S, task["size"], task["kind"], rng)
     test = np.setdiff1d(np.arange(len(ds)), idx)
-    balls, holes = _test_situations(ds, N_TEST_SITUATIONS, rng)
+    balls, holes = field.situations.sample(N_TEST_SITUATIONS, rng)
     rows = []
     for name in task["models"]:
         kw = {"random_state": task["rep"]}
@@ -180,6 +190,12 @@ def _repetition_body(task: dict) -> list[Table1Row]:
     return rows
 
 
+def protocol(field: Field) -> list[tuple[str, int, str]]:
+    """The training sets (label, size, kind) of a field: :data:`TRAINING_SETS` for the
+    dimension of the situations it declares."""
+    return TRAINING_SETS[min(max(field.situations.dim, 1), 2)]
+
+
 def run_table1(datasets: dict[str, tuple[Field, HittingDataset]], repetitions: int = 100,
                seed: int = 0, executor=None, progress: bool = False
                ) -> tuple[list[Table1Row], list[Table1Row]]:
@@ -188,8 +204,8 @@ def run_table1(datasets: dict[str, tuple[Field, HittingDataset]], repetitions: i
     Parameters
     ----------
     datasets : dict
-        Field name -> (field, data set); the data set's strategy picks the training sets and
-        models (:data:`TRAINING_SETS`, :data:`MODELS_BY_STRATEGY`).
+        Field name -> (field, data set); the field's situations pick the training sets
+        (:func:`protocol`), the data set's outputs the models (:data:`MODELS_BY_OUTPUTS`).
     repetitions : int
     seed : int
     executor : concurrent.futures.Executor, optional
@@ -207,24 +223,21 @@ def run_table1(datasets: dict[str, tuple[Field, HittingDataset]], repetitions: i
         raise ValueError(f"repetitions must be at least 1, got {repetitions}")
     tasks = []
     for fname, (field, ds) in datasets.items():
-        if ds.strategy not in TRAINING_SETS:
-            raise ValueError(f"{fname}: no Table 1 protocol for strategy {ds.strategy!r}")
-        for ti, (label, size, kind) in enumerate(TRAINING_SETS[ds.strategy]):
+        n_out = ds.outputs.shape[1]
+        for ti, (label, size, kind) in enumerate(protocol(field)):
             if size >= len(ds):
                 raise ValueError(f"{fname}: the data set has {len(ds)} situations, too few for "
                                  f"'{label}' (the teacher dropped {ds.dropped})")
             for rep in range(int(repetitions)):
                 tasks.append({"field": fname, "field_spec": field.spec, "dataset": ds,
                               "training": label, "size": size, "kind": kind, "rep": rep,
-                              "models": MODELS_BY_STRATEGY[ds.strategy],
-                              "n_components": N_COMPONENTS[ds.strategy],
+                              "models": MODELS_BY_OUTPUTS[n_out],
+                              "n_components": N_COMPONENTS[n_out],
                               "seed": [int(seed), zlib.crc32(fname.encode()), ti, rep]})
     results = (executor.map(_repetition, tasks) if executor is not None
                else map(_repetition, tasks))
-    if progress:
-        from tqdm.auto import tqdm
-
-        results = tqdm(results, total=len(tasks), desc="Table 1 repetitions", unit="rep")
+    results = progress_bar(results, progress, total=len(tasks), desc="Table 1 repetitions",
+                           unit="rep")
     runs = [row for rows in results for row in rows]
     means = []
     for key in dict.fromkeys((r.field, r.training, r.model) for r in runs):

@@ -1,4 +1,5 @@
-"""The teacher: good hitting parameters for a situation, found on the field's ball model.
+"""The teacher: good hitting parameters for the situations a field declares, found on the
+field's ball model.
 
 The paper (Sections 3, 5 and 7.2) trains the hitting-parameter model on examples of good shots
 given by a teacher. Here the teacher searches the ball model of :mod:`seds_casadi.minigolf.ball`:
@@ -7,25 +8,35 @@ given by a teacher. Here the teacher searches the ball model of :mod:`seds_casad
   ball): club-head velocity kappa v* R_alpha psi*
   (:class:`~seds_casadi.minigolf.stroke.Stroke`), ball launch velocity by
   :func:`seds_casadi.minigolf.ball.impact`.
-* The **situation** s is the hole's position relative to the ball in the field's plane (2-D).
+* The **situation** s is the hole's position relative to the ball in the field's plane (2-D);
+  the situations taught are spread over those the field declares
+  (:mod:`seds_casadi.minigolf.situations`; 20 along a slider, a grid of 56 over a region).
 * A **success map** (Fig. 4a) is success or failure over an (alpha, kappa) grid for one
   situation. Successful regions that are not connected are different **strategies**; training
-  data must come from one strategy (Fig. 4b), so the teacher keeps one, as the paper did:
+  data must come from one strategy (Fig. 4b), so the teacher keeps one across the data set: it
+  teaches the most central situation by its rule, then each next situation from its nearest
+  taught neighbour, taking the successful region nearest to the neighbour's choice.
+* Inside the region, the **speed is chosen by the teacher's strategy**
+  (:data:`~seds_casadi.minigolf.fields.TEACHER_STRATEGIES`, a field file may name one):
 
-  - ``"fixed_speed"`` (flat fields and the double hill): kappa is fixed for every situation
-    (default: the gain whose straight putt would stop :data:`FIXED_SPEED_OVERSHOOT` past the
-    hole on flat ground with the field's rolling resistance); alpha is the middle of the
-    successful interval nearest to the straight line to the hole.
-  - ``"minimal_speed"`` (arctan): the successful region that contains the slowest successful
-    hit; the paper's choice was the slowest hit itself, which sits on the edge of failure (the
-    ball just reaches the hole), so this teacher takes kappa a quarter of the way up that
-    region's speed range, and alpha in the middle of its interval at that speed (a choice the
-    paper leaves open; it makes the examples robust to the ball model's step).
+  - ``"fixed_speed"`` (the paper's flat fields and double hill): kappa is fixed for every
+    situation (default: the gain whose straight putt would stop :data:`FIXED_SPEED_OVERSHOOT`
+    past the hole on flat ground); alpha is the middle of the successful interval nearest to
+    the straight line to the hole (or to the neighbour's angle).
+  - ``"minimal_speed"`` (the paper's arctan): the region of the slowest successful hit; its
+    slowest gain kappa_min is found to 1e-4 by bisection, and the teacher hits
+    ``speed_margin`` faster, kappa = (1 + speed_margin) kappa_min (the slowest hit itself only
+    just reaches the hole), with alpha in the middle of the region's interval at that speed.
+  - ``"centre"`` (the default for a field of your own): the hit most likely to sink when it is
+    executed with errors of ``tolerance`` = (sigma_alpha [deg], sigma_kappa): the success
+    region blurred by that Gaussian, the weighted centre of its top tenth, alpha then centred
+    in the region's interval at that speed.
 
-Data sets as in the paper (:func:`~seds_casadi.minigolf.hitting_data.paper_situations`,
-kept in a :class:`~seds_casadi.minigolf.hitting_data.HittingDataset`): 20 situations along one
-input dimension (the hole moved sideways along the far edge, ball fixed) for the rough flat and
-double hill fields, 56 (a 7 x 8 grid of ball positions) for arctan.
+  In every case alpha is the middle of an interval whose edges are found on a grid ten times
+  finer than the search, so the taught angles carry no more than about 0.05 deg of the grid's
+  noise; choices that move smoothly with the situation keep the data learnable.
+* Situations without a successful hit are an error that names them and what to change
+  (:class:`TeachingError`), unless ``missing="drop"``.
 """
 
 from __future__ import annotations
@@ -35,20 +46,38 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .ball import MU_SLIDE, G, simulate_shots
-from .fields import Field, load_field
-from .hitting_data import HittingDataset, paper_situations, region_centre
+from .fields import TEACHER_STRATEGIES, Field, load_field
+from .hitting_data import HittingDataset, paper_situations
 from .stroke import Stroke
 
-__all__ = ["Stroke", "Teacher", "HittingDataset", "success_map", "paper_situations",
-           "collect_dataset", "STRATEGIES", "FIXED_SPEED_OVERSHOOT", "default_strategy"]
+__all__ = ["Stroke", "Teacher", "HittingDataset", "TeachingError", "success_map",
+           "paper_situations", "collect_dataset", "STRATEGIES", "FIXED_SPEED_OVERSHOOT",
+           "default_strategy", "components"]
 
-STRATEGIES = ("fixed_speed", "minimal_speed")
+STRATEGIES = TEACHER_STRATEGIES
 FIXED_SPEED_OVERSHOOT = 0.6  # m past the hole for the fixed-speed strategy's default gain
+DEFAULTS = {"strategy": "centre", "alpha_range": (-40.0, 40.0), "kappa_range": (0.8, 2.4),
+            "banks": False}
+
+
+class TeachingError(ValueError):
+    """The teacher found no successful shot for some declared situations.
+
+    Attributes
+    ----------
+    balls, holes : array, shape (m, 2)
+        The situations without one.
+    """
+
+    def __init__(self, message: str, balls: np.ndarray, holes: np.ndarray) -> None:
+        super().__init__(message)
+        self.balls, self.holes = balls, holes
 
 
 def default_strategy(field: Field) -> str:
-    """The paper's strategy for a field: minimal speed on arctan, fixed speed elsewhere."""
-    return "minimal_speed" if field.surface.shape == "arctan" else "fixed_speed"
+    """The strategy a field's file names (``"teacher": {"strategy": ...}``), else ``"centre"``
+    (the shipped files name the paper's: fixed speed, and minimal speed on arctan)."""
+    return field.teacher.get("strategy", DEFAULTS["strategy"])
 
 
 def success_map(field: Field, stroke: Stroke, ball, hole, alphas, kappas,
@@ -88,64 +117,72 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     return list(zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1)))
 
 
-def _components(M: np.ndarray) -> np.ndarray:
+def components(M: np.ndarray) -> np.ndarray:
     """Labels of the 4-connected components of a boolean grid (0 = background)."""
-    lab = np.zeros(M.shape, int)
-    n = 0
-    for i0, j0 in zip(*np.nonzero(M)):
-        if lab[i0, j0]:
-            continue
-        n += 1
-        stack = [(i0, j0)]
-        lab[i0, j0] = n
-        while stack:
-            i, j = stack.pop()
-            for a, b in ((i + 1, j), (i - 1, j), (i, j + 1), (i, j - 1)):
-                if 0 <= a < M.shape[0] and 0 <= b < M.shape[1] and M[a, b] and not lab[a, b]:
-                    lab[a, b] = n
-                    stack.append((a, b))
-    return lab
+    from scipy import ndimage
+
+    return ndimage.label(np.asarray(M, bool))[0]
+
+
+def blurred(mask: np.ndarray, sigma_cells: tuple[float, float]) -> np.ndarray:
+    """Probability that a hit aimed at each cell lands in ``mask`` when it is executed with
+    Gaussian errors of ``sigma_cells`` (rows, columns; in grid cells): the mask blurred."""
+    from scipy import ndimage
+
+    return ndimage.gaussian_filter(np.asarray(mask, float), sigma=sigma_cells, mode="constant")
 
 
 @dataclass
 class Teacher:
     """Finds good (alpha, kappa) for situations on a field's ball model (module docstring).
 
+    Settings left at None take the field file's ``"teacher"`` entry, else the defaults
+    (:data:`DEFAULTS`).
+
     Parameters
     ----------
     field : Field
     stroke : Stroke
-    strategy : {"fixed_speed", "minimal_speed"} or None
-        None: the paper's choice for the field (:func:`default_strategy`).
+    strategy : {"fixed_speed", "minimal_speed", "centre"} or None
     kappa : float or None
         The fixed speed gain (``"fixed_speed"``); None: a straight putt that would stop
-        :data:`FIXED_SPEED_OVERSHOOT` past the field's hole on flat ground.
-    alpha_range : (float, float)
-        Angles searched [deg].
-    kappa_range : (float, float)
-        Speed gains searched (``"minimal_speed"``).
+        :data:`FIXED_SPEED_OVERSHOOT` past the hole on flat ground.
+    alpha_range : (float, float) or None
+        Angles searched [deg] (default -40, 40).
+    kappa_range : (float, float) or None
+        Speed gains searched (default 0.8, 2.4).
     resolution : (int, int)
-        Grid of the search (angles, gains); the angle is refined around the choice.
-    banks : bool, default False
-        Whether shots off a wall count as good shots. The paper's teacher played direct shots;
-        bank shots are a different strategy (on the arctan field the slowest hits are often
-        banks, and a data set that mixes them with direct shots cannot be learned, Fig. 4b).
+        Grid of the search (angles, gains); the choice is refined on a finer grid.
+    banks : bool or None
+        Whether shots off a wall count as good shots (default False). The paper's teacher
+        played direct shots; bank shots are other strategies (a data set that mixes them with
+        direct shots cannot be learned, Fig. 4b).
+    speed_margin : float
+        ``"minimal_speed"``: the teacher hits this fraction faster than the slowest hit that
+        sinks.
+    tolerance : (float, float)
+        ``"centre"``: the execution errors (sigma of alpha [deg], sigma of kappa) the centre
+        of a success region is measured against.
     """
 
     field: Field
     stroke: Stroke
     strategy: str | None = None
     kappa: float | None = None
-    alpha_range: tuple = (-40.0, 40.0)
-    kappa_range: tuple = (0.8, 2.4)
+    alpha_range: tuple | None = None
+    kappa_range: tuple | None = None
     resolution: tuple = (161, 65)
     engine: str = "auto"
-    banks: bool = False
+    banks: bool | None = None
+    speed_margin: float = 0.03
+    tolerance: tuple = (1.0, 0.03)
     _fixed: float = field(init=False, default=0.0, repr=False)
 
     def __post_init__(self) -> None:
-        if self.strategy is None:
-            self.strategy = default_strategy(self.field)
+        settings = {**DEFAULTS, **self.field.teacher}
+        for key in ("strategy", "alpha_range", "kappa_range", "banks", "kappa"):
+            if getattr(self, key) is None:
+                setattr(self, key, settings.get(key))
         if self.strategy not in STRATEGIES:
             raise ValueError(f"unknown strategy {self.strategy!r}; valid: {', '.join(STRATEGIES)}")
         lo, hi = self.alpha_range
@@ -157,11 +194,20 @@ class Teacher:
                              f"{self.kappa_range}")
         if self.kappa is not None and not (np.isfinite(self.kappa) and self.kappa > 0):
             raise ValueError(f"kappa must be positive, got {self.kappa}")
+        n_a, n_k = self.resolution
+        if int(n_a) < 3 or int(n_k) < 3:
+            raise ValueError(f"resolution must be at least (3, 3), got {self.resolution}")
+        if not 0 <= self.speed_margin < 1:
+            raise ValueError(f"speed_margin must be in [0, 1), got {self.speed_margin}")
+        if not (len(self.tolerance) == 2 and min(self.tolerance) > 0):
+            raise ValueError(f"tolerance must be two positive numbers (sigma of alpha [deg], "
+                             f"sigma of kappa), got {self.tolerance}")
         self._fixed = float(self.kappa) if self.kappa is not None else self._default_kappa()
 
     def _default_kappa(self) -> float:
         f = self.field
-        dist = np.linalg.norm(f.hole - region_centre(f.ball_region)) + FIXED_SPEED_OVERSHOOT
+        balls, holes = f.situations.design()
+        dist = float(np.mean(np.linalg.norm(holes - balls, axis=1))) + FIXED_SPEED_OVERSHOOT
         a_roll = 5 / 7 * f.rolling_resistance * G
         # launch v0 skids to 5/7 v0 over d_s = 24/98 v0^2/(mu g) (see ball), then rolls
         # (5/7 v0)^2 / (2 a_roll): solve d_s + d_r = dist for v0
@@ -175,72 +221,155 @@ class Teacher:
         """The fixed speed gain of the ``"fixed_speed"`` strategy."""
         return self._fixed
 
+    def describe(self) -> str:
+        """The teacher's settings in words, for messages."""
+        speed = (f"kappa {self._fixed:.3f}" if self.strategy == "fixed_speed"
+                 else f"kappa {self.kappa_range[0]:g}..{self.kappa_range[1]:g}")
+        shots = "bank shots allowed" if self.banks else "direct shots only"
+        return (f"strategy {self.strategy}, {speed}, alpha {self.alpha_range[0]:g}.."
+                f"{self.alpha_range[1]:g} deg, {shots}")
+
+    # ------------------------------------------------------------------ the search
+    def grid(self) -> tuple[np.ndarray, np.ndarray]:
+        """The search grid: angles [rad] and speed gains."""
+        n_a, n_k = (int(v) for v in self.resolution)
+        return (np.deg2rad(np.linspace(*self.alpha_range, n_a)),
+                np.linspace(*self.kappa_range, n_k))
+
+    def map(self, ball, hole, alphas=None, kappas=None) -> np.ndarray:
+        """The success map of one situation over the search grid (or given angles and gains);
+        only direct shots unless ``banks``."""
+        if alphas is None or kappas is None:
+            ga, gk = self.grid()
+            alphas = ga if alphas is None else alphas
+            kappas = gk if kappas is None else kappas
+        return success_map(self.field, self.stroke, ball, hole, alphas, kappas, self.engine,
+                           self.banks)
+
     def good_shot(self, ball, hole, reference=None) -> tuple[float, float]:
         """(alpha [rad], kappa) that sinks the ball from ``ball`` into ``hole`` by this
         teacher's strategy, or (nan, nan) when the strategy has no successful hit there.
 
-        ``reference`` (alpha, kappa), the choice in a neighbouring situation, keeps the
+        ``reference`` (alpha [rad], kappa), the choice in a neighbouring situation, keeps the
         strategy: the successful region nearest to it is used (else the rule alone picks)."""
         ball = np.asarray(ball, float)
         hole = np.asarray(hole, float)
-        n_a, n_k = self.resolution
-        alphas = np.deg2rad(np.linspace(*self.alpha_range, n_a))
-        aim = float(self.stroke.aim(hole - ball)[0])
+        alphas, kappas = self.grid()
         if self.strategy == "fixed_speed":
-            row = success_map(self.field, self.stroke, ball, hole, alphas, [self._fixed],
-                              self.engine, self.banks)[0]
-            runs = _runs(row)
-            if not runs:
-                return np.nan, np.nan
-            mids = [0.5 * (alphas[a] + alphas[b - 1]) for a, b in runs]
-            goal = aim if reference is None else reference[0]
-            a0, b0 = runs[int(np.argmin([abs(m - goal) for m in mids]))]
-            return self._refine(ball, hole, alphas, a0, b0, self._fixed), self._fixed
-        kappas = np.linspace(*self.kappa_range, n_k)
-        M = success_map(self.field, self.stroke, ball, hole, alphas, kappas, self.engine,
-                        self.banks)
+            goal = float(self.stroke.aim(hole - ball)[0]) if reference is None else reference[0]
+            a = self._middle(ball, hole, self._fixed, goal, alphas[0], alphas[-1])
+            return (a, self._fixed) if np.isfinite(a) else (np.nan, np.nan)
+        M = self.map(ball, hole, alphas, kappas)
         if not M.any():
             return np.nan, np.nan
-        lab = _components(M)
-        if reference is None:
-            first = int(np.nonzero(M.any(axis=1))[0][0])
-            # the slowest successful hits (nearest the straight aim among them) pick the region
-            cols = np.flatnonzero(M[first])
-            comp = lab[first, cols[np.argmin(np.abs(alphas[cols] - aim))]]
+        lab = components(M)
+        comp = lab == self._pick_component(M, lab, alphas, kappas, ball, hole, reference)
+        if self.strategy == "minimal_speed":
+            kappa, guess = self._minimal(ball, hole, comp, alphas, kappas)
         else:
+            kappa, guess = self._centre(comp, alphas, kappas)
+        span = 4 * (alphas[1] - alphas[0])
+        cols = np.flatnonzero(comp.any(axis=0))
+        a = self._middle(ball, hole, kappa, guess, alphas[cols[0]] - span,
+                         alphas[cols[-1]] + span)
+        return (a, kappa) if np.isfinite(a) else (np.nan, np.nan)
+
+    def _pick_component(self, M, lab, alphas, kappas, ball, hole, reference) -> int:
+        """The label of the successful region the shot is taken from."""
+        if reference is not None:
             # the region nearest to the neighbour's choice (grid units in both directions)
             ki, ai = np.nonzero(M)
             da = (alphas[ai] - reference[0]) / (alphas[1] - alphas[0])
             dk = (kappas[ki] - reference[1]) / (kappas[1] - kappas[0])
             j = int(np.argmin(da * da + dk * dk))
-            comp = lab[ki[j], ai[j]]
-        rows = np.flatnonzero((lab == comp).any(axis=1))
-        i = rows[0] + int(round(0.25 * (rows[-1] - rows[0])))
-        if reference is not None:
-            # continue the neighbour's speed inside the region (not on its slow edge)
-            lo_row = min(rows[0] + 1, rows[-1])
-            i = int(np.clip(np.argmin(np.abs(kappas - reference[1])), lo_row, rows[-1]))
-            if not (lab[i] == comp).any():
-                i = rows[np.argmin(np.abs(rows - i))]
-        kappa = float(kappas[i])
-        runs = _runs(lab[i] == comp)
-        a0, b0 = max(runs, key=lambda r: r[1] - r[0])
-        return self._refine(ball, hole, alphas, a0, b0, kappa), kappa
+            return int(lab[ki[j], ai[j]])
+        aim = float(self.stroke.aim(hole - ball)[0])
+        if self.strategy == "minimal_speed":
+            # the slowest successful hits (nearest the straight aim among them)
+            first = int(np.nonzero(M.any(axis=1))[0][0])
+            cols = np.flatnonzero(M[first])
+            return int(lab[first, cols[np.argmin(np.abs(alphas[cols] - aim))]])
+        # centre: the region whose best hit is most likely to sink
+        P = blurred(M, self._sigma_cells(alphas, kappas))
+        best = [P[lab == c].max() for c in range(1, lab.max() + 1)]
+        return 1 + int(np.argmax(best))
 
-    def _refine(self, ball, hole, alphas, a0, b0, kappa) -> float:
-        """Middle of a successful angle interval, its edges found on a 10x finer grid."""
-        step = alphas[1] - alphas[0]
-        lo = np.linspace(alphas[a0] - step, alphas[a0], 11)
-        hi = np.linspace(alphas[b0 - 1], alphas[b0 - 1] + step, 11)
-        ok = success_map(self.field, self.stroke, ball, hole, np.concatenate([lo, hi]), [kappa],
-                         self.engine, self.banks)[0]
-        left = lo[np.argmax(ok[:11])] if ok[:11].any() else alphas[a0]
-        right = hi[10 - np.argmax(ok[11:][::-1])] if ok[11:].any() else alphas[b0 - 1]
-        return float(0.5 * (left + right))
+    def _sigma_cells(self, alphas, kappas) -> tuple[float, float]:
+        return (self.tolerance[1] / (kappas[1] - kappas[0]),
+                np.deg2rad(self.tolerance[0]) / (alphas[1] - alphas[0]))
 
-    def collect(self, balls, holes, progress: bool = False) -> HittingDataset:
-        """Good shots for many situations; situations without one are dropped (reported in
-        the data set's ``dropped``)."""
+    def _minimal(self, ball, hole, comp, alphas, kappas) -> tuple[float, float]:
+        """``"minimal_speed"``: (1 + margin) times the region's slowest gain, found by
+        bisection between the grid's rows, and the region's angle there (a first guess)."""
+        rows = np.flatnonzero(comp.any(axis=1))
+        r0 = rows[0]
+        da = alphas[1] - alphas[0]
+        cols = np.flatnonzero(comp[r0:min(r0 + 3, rows[-1] + 1)].any(axis=0))
+        scan = np.arange(alphas[cols[0]] - 3 * da, alphas[cols[-1]] + 3 * da, da / 10)
+        hi = kappas[r0]
+        if r0 > 0:  # (below the search range, its lowest gain is taken)
+            lo = kappas[r0 - 1]
+            for _ in range(8):  # to (kappa step) / 256, about 1e-4
+                mid = 0.5 * (lo + hi)
+                if self.map(ball, hole, scan, [mid]).any():
+                    hi = mid
+                else:
+                    lo = mid
+        kappa = min(hi * (1 + self.speed_margin), kappas[rows[-1]])
+        i = int(np.argmin(np.abs(kappas - kappa)))
+        i = int(rows[np.argmin(np.abs(rows - i))])
+        guess = float(np.mean(alphas[comp[i]]))
+        return float(kappa), guess
+
+    def _centre(self, comp, alphas, kappas) -> tuple[float, float]:
+        """``"centre"``: the weighted centre of the top tenth of the blurred region (the hits
+        most likely to sink under the tolerance errors), as (kappa, alpha guess)."""
+        P = blurred(comp, self._sigma_cells(alphas, kappas)) * comp
+        top = P >= 0.9 * P.max()
+        w = P * top
+        K, A = np.meshgrid(kappas, alphas, indexing="ij")
+        kappa, guess = float(np.sum(w * K) / w.sum()), float(np.sum(w * A) / w.sum())
+        i = int(np.argmin(np.abs(kappas - kappa)))
+        if not comp[i].any():  # a bent region whose centre falls outside it
+            i, j = np.unravel_index(np.argmax(P), P.shape)
+            kappa, guess = float(kappas[i]), float(alphas[j])
+        return kappa, guess
+
+    def _middle(self, ball, hole, kappa: float, guess: float, lo: float, hi: float) -> float:
+        """The middle of the successful angle interval at ``kappa`` that contains ``guess``
+        (else the nearest one), its edges on a grid a tenth of the search's angle step; nan
+        when none sinks."""
+        alphas, _ = self.grid()
+        step = (alphas[1] - alphas[0]) / 10
+        lo, hi = max(lo, alphas[0] - 10 * step), min(hi, alphas[-1] + 10 * step)
+        scan = np.arange(lo, hi + 0.5 * step, step)
+        row = self.map(ball, hole, scan, [kappa])[0]
+        runs = _runs(row)
+        if not runs:
+            return np.nan
+        mids = np.array([0.5 * (scan[a] + scan[b - 1]) for a, b in runs])
+        inside = [k for k, (a, b) in enumerate(runs) if scan[a] <= guess <= scan[b - 1]]
+        k = inside[0] if inside else int(np.argmin(np.abs(mids - guess)))
+        return float(mids[k])
+
+    # ------------------------------------------------------------------ a data set
+    def collect(self, balls, holes, progress: bool = False,
+                missing: str = "raise") -> HittingDataset:
+        """Good shots for many situations, one strategy for the whole set.
+
+        Parameters
+        ----------
+        balls, holes : array, shape (n, 2)
+        progress : bool
+            A progress bar on stderr (only on a terminal).
+        missing : {"raise", "drop"}
+            Situations without a successful hit: a :class:`TeachingError` naming them
+            (default), or left out (counted in the data set's ``dropped``).
+        """
+        from ._progress import progress_bar
+
+        if missing not in ("raise", "drop"):
+            raise ValueError(f"missing must be 'raise' or 'drop', got {missing!r}")
         balls = np.atleast_2d(np.asarray(balls, float))
         holes = np.atleast_2d(np.asarray(holes, float))
         if balls.shape != holes.shape or balls.shape[1] != 2:
@@ -252,16 +381,13 @@ class Teacher:
         # then teach each next-nearest situation with its nearest taught neighbour's choice as
         # the reference (the paper's teacher kept one strategy by hand)
         S = holes - balls
-        span = np.where(np.ptp(S, axis=0) > 0, np.ptp(S, axis=0), 1.0)
+        spread = np.ptp(S, axis=0)
+        span = np.where(spread > 0, spread, 1.0)
         Z = (S - np.median(S, axis=0)) / span
         order = np.argsort(np.sum(Z * Z, axis=1), kind="stable")
-        it = order
-        if progress:
-            from tqdm.auto import tqdm
-
-            it = tqdm(order, desc=f"teacher on {self.field.name}", leave=False)
         done: list[int] = []
-        for i in it:
+        for i in progress_bar(order, progress, desc=f"teacher on {self.field.name}",
+                              unit="situation", leave=False):
             ref = None
             good = [j for j in done if np.isfinite(out[j, 0])]
             if good:
@@ -270,16 +396,31 @@ class Teacher:
             out[i] = self.good_shot(balls[i], holes[i], ref)
             done.append(i)
         ok = np.isfinite(out[:, 0])
+        if not ok.all() and missing == "raise":
+            raise self._missing_error(balls[~ok], holes[~ok], len(balls))
         return HittingDataset(self.field.name, self.strategy, balls[ok], holes[ok],
-                              out[ok, 0], out[ok, 1], self.stroke,
-                              dropped=int((~ok).sum()))
+                              out[ok, 0], out[ok, 1], self.stroke, dropped=int((~ok).sum()),
+                              declared=self.field.situations.to_spec())
+
+    def _missing_error(self, balls, holes, n: int) -> TeachingError:
+        shown = "; ".join(f"ball {np.round(b, 3).tolist()} hole {np.round(h, 3).tolist()}"
+                          for b, h in list(zip(balls, holes))[:8])
+        more = f" and {len(balls) - 8} more" if len(balls) > 8 else ""
+        return TeachingError(
+            f"the teacher ({self.describe()}) found no successful shot for {len(balls)} of {n} "
+            f"situations on {self.field.name}: {shown}{more}. Change the field file: widen the "
+            f"'teacher' entry's kappa_range or alpha_range, allow bank shots (\"banks\": true), "
+            f"choose another strategy, or declare 'situations' that leave these out (a smaller "
+            f"ball region or hole slider)", balls, holes)
 
 
-def collect_dataset(field: Field | str, stroke: Stroke, layout: str | None = None,
-                    n: int | None = None, strategy: str | None = None,
-                    progress: bool = False, **teacher_kwargs) -> HittingDataset:
-    """The paper's data set for a field (:func:`paper_situations`) taught by :class:`Teacher`."""
+def collect_dataset(field: Field | str, stroke: Stroke, n: int | None = None,
+                    strategy: str | None = None, progress: bool = False,
+                    missing: str = "raise", **teacher_kwargs) -> HittingDataset:
+    """The teacher's data set for a field: :class:`Teacher` on :func:`paper_situations`
+    (``n`` situations spread over those the field declares; the paper's 20 or 56 by
+    default)."""
     f = load_field(field) if not isinstance(field, Field) else field
-    balls, holes = paper_situations(f, layout, n)
-    return Teacher(f, stroke, strategy, **teacher_kwargs).collect(balls, holes, progress)
-
+    balls, holes = paper_situations(f, n)
+    return Teacher(f, stroke, strategy, **teacher_kwargs).collect(balls, holes, progress,
+                                                                  missing)

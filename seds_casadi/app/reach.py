@@ -1,0 +1,67 @@
+"""Can the robot play the situations a field declares? A check before any swing is simulated.
+
+The robot stands at its default place beside each ball
+(:func:`~seds_casadi.robots.control.place_robot`); a ball it cannot reach, or a start of the
+swing (0.3 m behind the ball, 5 cm up, turned by alpha: the default of
+:func:`~seds_casadi.robots.control.simulate_swing`) where the club head cannot be placed, makes
+those situations unplayable. :func:`check_reach` names them and says what to change.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["unreachable", "check_reach"]
+
+_START = np.array([-0.3, 0.0, 0.05])  # simulate_swing's default start, relative to the contact
+
+
+def unreachable(robot: str, field, balls, alphas, direction) -> list[tuple[np.ndarray, str]]:
+    """The balls (with the hit's angle) the robot cannot play, and why.
+
+    Parameters
+    ----------
+    robot : str
+        Robot name or ``.urdf`` file.
+    field : Field
+    balls : array, shape (n, 2)
+    alphas : array, shape (n,)
+        Hitting angles [rad].
+    direction : array, shape (3,)
+        The motion's default hitting direction psi*.
+
+    Returns
+    -------
+    list of (ball (2,), reason)
+    """
+    from ..minigolf.ball import BALL_RADIUS
+    from ..motion.hitting import rotation_z
+    from ..robots.control import place_head, place_robot
+
+    bad = []
+    d = np.asarray(direction, float)
+    for b, a in zip(np.atleast_2d(balls), np.atleast_1d(alphas)):
+        z = float(field.surface.height(np.asarray(b, float)[None])[0]) + BALL_RADIUS
+        ball = np.array([b[0], b[1], z])
+        psi = rotation_z(float(a)) @ d
+        contact = ball - BALL_RADIUS / np.hypot(psi[0], psi[1]) * np.array([psi[0], psi[1], 0])
+        try:
+            r = place_robot(robot, b, field)
+            r.check_reach(ball)
+            place_head(r, contact + rotation_z(float(a)) @ _START, psi)
+        except ValueError as exc:
+            bad.append((np.asarray(b, float), str(exc)))
+    return bad
+
+
+def check_reach(robot: str, field, balls, alphas, direction, what: str) -> None:
+    """``ValueError`` naming the situations of ``what`` (e.g. "declared ball positions") the
+    robot cannot play (:func:`unreachable`) and what to change; nothing when all are fine."""
+    bad = unreachable(robot, field, balls, alphas, direction)
+    if not bad:
+        return
+    shown = "; ".join(f"ball {np.round(b, 3).tolist()}: {why}" for b, why in bad[:4])
+    more = f" and {len(bad) - 4} more" if len(bad) > 4 else ""
+    raise ValueError(f"the {robot} cannot play {len(bad)} of {len(np.atleast_2d(balls))} "
+                     f"{what} on {field.name}: {shown}{more}. Declare situations it can reach "
+                     f"(the field file's 'situations' or 'ball_region'), or use another robot")
