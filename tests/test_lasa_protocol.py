@@ -113,6 +113,9 @@ def test_reproduction_dtw_compares_each_reproduction_with_its_whole_reference():
     paths = simulate_until_slow(field, starts, dt=0.5)
     want = [dtw_distance(paths[:, 0], refs[0]), dtw_distance(paths[:, 1], refs[1])]
     np.testing.assert_allclose(reproduction_dtw(field, starts, refs, dt=0.5), want, rtol=1e-15)
+    dtw, got = reproduction_dtw(field, starts, refs, return_paths=True, dt=0.5)
+    np.testing.assert_array_equal(got, paths)
+    np.testing.assert_allclose(dtw, want, rtol=1e-15)
     with pytest.raises(ValueError, match="one start per reference"):
         reproduction_dtw(field, starts, refs[:1])
 
@@ -199,8 +202,8 @@ def test_unknown_protocol_lists_the_valid_ones_and_ds_opt_options_are_checked():
 def test_dsopt_table_sets_ours_beside_the_published_figures():
     pub = PUBLISHED_SEDS["Angle"]
     rows = [DsOptResult("Angle", "mse", st, 2 * pub[o], pub[o + 1], pub[o + 2], 1.0, 10, 5,
-                        True, "Solve_Succeeded", "given", 0.0, pub[o], pub[o + 1], pub[o + 2],
-                        pub[0]) for st, o in (("train", 1), ("test", 4))]
+                        True, "Solve_Succeeded", "given", 0.0, 400, 0.01, 20.0, pub[o],
+                        pub[o + 1], pub[o + 2], pub[0]) for st, o in (("train", 1), ("test", 4))]
     text = dsopt_table(rows)
     assert "ours: SEDS mse, test" in text and "published SEDS, test, same shapes" in text
     assert "LPV-DS PC-GMM O2, test" in text and "5.19" in text
@@ -214,6 +217,9 @@ def test_evaluate_shape_dsopt_scores_train_and_test_with_a_certified_model(tmp_p
     for r in rows:
         assert r.n_components == 2 and r.certified and r.k_choice == "given"
         assert 0.5 < r.rmse_mmps < 20 and 0 < r.e_dot < 0.2 and 100 < r.dtwd_mm < 10000
+        # the reproductions stopped by the slow rule, near the target (at 0.1 mm/s per component)
+        assert 4 <= r.repro_points < 2999 and r.max_end_distance_mm < 1.0
+        assert r.max_rate_per_s > 0
     assert rows[0].seconds == rows[1].seconds and rows[0].iterations > 0
     assert (tmp_path / "a.png").stat().st_size > 1000
     # K by BIC, kept small here: the search runs on the training set only

@@ -78,6 +78,7 @@ _CONVERGED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 CSV_COLUMNS = ("shape", "objective", "protocol", "rmse", "e_dot", "dtwd", "seconds", "iterations")
 DSOPT_COLUMNS = ("shape", "objective", "set", "rmse_mmps", "e_dot", "dtwd_mm", "seconds",
                  "iterations", "n_components", "certified", "status", "k_choice", "seconds_k",
+                 "repro_points", "max_end_distance_mm", "max_rate_per_s",
                  "published_rmse_mmps", "published_e_dot", "published_dtwd_mm", "published_k")
 
 #: ds-opt's data selection: demonstrations (1-based, as in the script), sample step, and the
@@ -177,6 +178,9 @@ class DsOptResult:
     status: str
     k_choice: str
     seconds_k: float
+    repro_points: int
+    max_end_distance_mm: float
+    max_rate_per_s: float
     published_rmse_mmps: float
     published_e_dot: float
     published_dtwd_mm: float
@@ -432,29 +436,31 @@ def evaluate_shape_dsopt(shape: str, objective: str = "mse", n_components: int |
     seconds = time.perf_counter() - t0
     cert = model.certificate
     certified = bool(cert["max_eig_sym_A"] < 0 and cert["min_eig_cov"] > 0)
+    rate = float(max(np.abs(np.linalg.eigvals(A)).max() for A in model.A))
     pub = PUBLISHED_SEDS[shape]
-    rows = []
+    rows, paths = [], {}
     for name, data in sets.items():
         X, V = np.concatenate(data.positions), np.concatenate(data.velocities)
         F = model.predict(X)
-        dtw = reproduction_dtw(model.predict, data.starts, data.positions, dt=0.01,
-                               speed_tol=0.1, max_steps=3000, window=4)
+        dtw, paths[name] = reproduction_dtw(model.predict, data.starts, data.positions,
+                                            return_paths=True, dt=0.01, speed_tol=0.1,
+                                            max_steps=3000, window=4)
+        end = float(np.linalg.norm(paths[name][-1] - model.target, axis=1).max())
         off = 1 if name == "train" else 4
         rows.append(DsOptResult(
             shape, objective, name, velocity_rmse(F, V),
             float(np.mean(pointwise_direction_error(F, V, min_norm_product=0.0))),
             float(np.mean(dtw)), seconds, int(model.fit_info["iterations"]), K, certified,
-            str(model.fit_info["status"]), how, k_seconds, float(pub[off]), float(pub[off + 1]),
-            float(pub[off + 2]), int(pub[0])))
+            str(model.fit_info["status"]), how, k_seconds, len(paths[name]), end, rate,
+            float(pub[off]), float(pub[off + 1]), float(pub[off + 2]), int(pub[0])))
     if figure_path:
-        from ..core.metrics import simulate_until_slow
         from .plotting import _plt, plot_streamlines, save_figure
 
         test = sets["test"]
-        paths = simulate_until_slow(model.predict, test.starts)
         fig, ax = _plt().subplots(figsize=(5, 4.5))
-        plot_streamlines(model, test.demonstrations(), [paths[:, n] for n in range(len(test.demos))],
-                         ax=ax, title=f"{shape} · {objective} · ds-opt test · K={K}")
+        plot_streamlines(model, test.demonstrations(),
+                         [paths["test"][:, n] for n in range(len(test.demos))], ax=ax,
+                         title=f"{shape} · {objective} · ds-opt test · K={K}")
         save_figure(fig, figure_path)
     return rows
 
@@ -709,8 +715,9 @@ def dsopt_table(results: list[DsOptResult], per_shape: bool = True, worst: int =
     [mm], the median fit time, the median K, how many models are certified and how many fits
     stopped without converging; then published SEDS over the same shapes (:data:`PUBLISHED_SEDS`)
     and the published means over all 26 (:data:`PUBLISHED_MEANS`, LPV-DS for the test set only).
-    With ``per_shape``: each shape's test figures against published SEDS, and the ``worst``
-    shapes by the ratio ours / published for each metric.
+    With ``per_shape``: each shape's test figures against published SEDS (with the diagnostics
+    of :class:`DsOptResult`: reproduction points, largest end distance, largest rate), and the
+    ``worst`` shapes by the ratio ours / published for each metric.
     """
     if not results:
         return ""
@@ -745,14 +752,15 @@ def dsopt_table(results: list[DsOptResult], per_shape: bool = True, worst: int =
                 continue
             lines += ["", f"per shape, test set, SEDS {o}: ours / published SEDS",
                       f"{'shape':<18} {'K':>7} {'RMSE mm/s':>15} {'e_dot':>15} {'DTWD mm':>17} "
-                      f"{'fit s':>7} {'iter':>5}  status"]
+                      f"{'fit s':>7} {'iter':>5} {'points':>6} {'end mm':>7} {'rate/s':>7}  status"]
             for r in rs:
                 lines.append(
                     f"{r.shape:<18} {r.n_components:>3}/{r.published_k:<3} "
                     f"{r.rmse_mmps:>7.2f}/{r.published_rmse_mmps:<7.2f} "
                     f"{r.e_dot:>7.3f}/{r.published_e_dot:<7.3f} "
                     f"{r.dtwd_mm:>8.0f}/{r.published_dtwd_mm:<8.0f} {r.seconds:>7.1f} "
-                    f"{r.iterations:>5d}  {r.status}")
+                    f"{r.iterations:>5d} {r.repro_points:>6d} {r.max_end_distance_mm:>7.2f} "
+                    f"{r.max_rate_per_s:>7.0f}  {r.status}")
             if worst:
                 for name, a, b in (("RMSE", "rmse_mmps", "published_rmse_mmps"),
                                    ("e_dot", "e_dot", "published_e_dot"),

@@ -180,7 +180,8 @@ def simulate_until_slow(field, starts: np.ndarray, dt: float = 0.01, speed_tol: 
     return np.stack(traj)
 
 
-def reproduction_dtw(field, starts: np.ndarray, references, **simulate_kw) -> np.ndarray:
+def reproduction_dtw(field, starts: np.ndarray, references, return_paths: bool = False,
+                     **simulate_kw) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
     """DTW distance of each reproduction to its reference trajectory (ds-opt's DTWD).
 
     The starts are integrated together by :func:`simulate_until_slow` (keyword arguments go
@@ -192,18 +193,23 @@ def reproduction_dtw(field, starts: np.ndarray, references, **simulate_kw) -> np
         f(X), X of shape (m, d) -> velocities (m, d).
     starts : array, shape (m, d)
     references : sequence of m arrays, each shape (T_n, d)
+    return_paths : bool, default False
+        Also return the reproductions.
 
     Returns
     -------
     array, shape (m,)
         The DTW distances (units of the positions; mm for LASA).
+    paths : array, shape (T, m, d)
+        Only with ``return_paths``: the output of :func:`simulate_until_slow`.
     """
     starts = np.atleast_2d(np.asarray(starts, dtype=float))
     if len(references) != len(starts):
         raise ValueError(f"{len(starts)} starts for {len(references)} reference trajectories; "
                          "give one start per reference")
     paths = simulate_until_slow(field, starts, **simulate_kw)
-    return np.array([dtw_distance(paths[:, n], ref) for n, ref in enumerate(references)])
+    dtw = np.array([dtw_distance(paths[:, n], ref) for n, ref in enumerate(references)])
+    return (dtw, paths) if return_paths else dtw
 
 
 def _resample(x: np.ndarray, n: int) -> np.ndarray:
