@@ -62,6 +62,28 @@ def test_joint_gmr_keeps_the_correlation_of_the_outputs():
     assert corr > 0.9
 
 
+@pytest.mark.parametrize("separate", [False, True])
+def test_gmr_does_not_depend_on_the_units_of_its_outputs(separate):
+    # the angle in degrees or radians, the gain as a gain or in percent: the same model (the
+    # GMM is fitted on data scaled per dimension); once one covariance floor for all
+    # dimensions, set by the largest, swamped a small-scale output of the joint GMM
+    rng = np.random.default_rng(2)
+    S = np.column_stack([rng.uniform(-0.1, 0.3, 40), rng.uniform(-0.45, 0.45, 40)])
+    alpha = 30 * np.tanh(3 * S[:, 1]) + rng.normal(0, 0.2, 40)           # deg
+    kappa = 1.0 + 0.2 * S[:, 1] ** 2 - 0.1 * S[:, 0] + rng.normal(0, 0.002, 40)
+    Q = np.column_stack([rng.uniform(-0.1, 0.3, 50), rng.uniform(-0.45, 0.45, 50)])
+    a = GMRModel(3, separate=separate).fit(S, np.column_stack([alpha, kappa]))
+    b = GMRModel(3, separate=separate).fit(S, np.column_stack([np.deg2rad(alpha),
+                                                               100 * kappa]))
+    pa, pb = a.predict(Q), b.predict(Q)
+    np.testing.assert_allclose(np.deg2rad(pa[:, 0]), pb[:, 0], rtol=1e-5, atol=1e-8)
+    np.testing.assert_allclose(100 * pa[:, 1], pb[:, 1], rtol=1e-5, atol=1e-6)
+    # the fitted parameters are in the data's own units
+    _, gm = a.gmms_[0]
+    assert np.all(gm.means_[:, :2].min(axis=0) > [-0.2, -0.5])
+    assert np.all(gm.means_[:, :2].max(axis=0) < [0.4, 0.5])
+
+
 def test_parameter_counts_match_table_1():
     # rough flat / double hill: s 2-D, angle only; arctan: s 2-D, angle and speed
     assert gpr_param_count(5, 2, 1) == 19 and gpr_param_count(10, 2, 1) == 34

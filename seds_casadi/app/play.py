@@ -368,6 +368,7 @@ def _figures(fld, motion, data, fitted, rows, learners, out) -> None:
                    hole=np.array([[r["hole_x_m"], r["hole_y_m"]] for r in rs]))
         ax.set_title(f"{m}: {np.mean([r['sunk'] for r in rs]):.0%} sunk (green: sunk, red: "
                      f"missed)", fontsize=9)
+    fig.tight_layout()
     save_figure(fig, os.path.join(out, "shots.png"))
     # the learned motion: swings from a few starts, turned by three angles, seen from above
     fig, ax = plt.subplots(figsize=(6, 5))

@@ -24,9 +24,11 @@ given by a teacher. Here the teacher searches the ball model of :mod:`seds_casad
     past the hole on flat ground); alpha is the middle of the successful interval nearest to
     the straight line to the hole (or to the neighbour's angle).
   - ``"minimal_speed"`` (the paper's arctan): the region of the slowest successful hit; its
-    slowest gain kappa_min is found to 1e-4 by bisection, and the teacher hits
-    ``speed_margin`` faster, kappa = (1 + speed_margin) kappa_min (the slowest hit itself only
-    just reaches the hole), with alpha in the middle of the region's interval at that speed.
+    slowest gain kappa_min at which an angle interval of at least ``min_width`` (1 deg)
+    sinks is found to 1e-4 by bisection, and the teacher hits ``speed_margin`` faster,
+    kappa = (1 + speed_margin) kappa_min (the slowest hit itself only just reaches the hole,
+    and the thin tips of a region come and go with the search grid), with alpha in the
+    middle of the region's interval at that speed.
   - ``"centre"`` (the default for a field of your own): the hit most likely to sink when it is
     executed with errors of ``tolerance`` = (sigma_alpha [deg], sigma_kappa): the success
     region blurred by that Gaussian, the weighted centre of its top tenth, alpha then centred
@@ -118,10 +120,12 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
 
 
 def components(M: np.ndarray) -> np.ndarray:
-    """Labels of the 4-connected components of a boolean grid (0 = background)."""
+    """Labels of the connected components of a boolean grid, diagonal neighbours connected
+    (0 = background): a thin success region that runs diagonally across the grid stays one
+    region, instead of breaking into pieces that look like separate strategies."""
     from scipy import ndimage
 
-    return ndimage.label(np.asarray(M, bool))[0]
+    return ndimage.label(np.asarray(M, bool), structure=np.ones((3, 3), int))[0]
 
 
 def blurred(mask: np.ndarray, sigma_cells: tuple[float, float]) -> np.ndarray:
@@ -158,8 +162,12 @@ class Teacher:
         played direct shots; bank shots are other strategies (a data set that mixes them with
         direct shots cannot be learned, Fig. 4b).
     speed_margin : float
-        ``"minimal_speed"``: the teacher hits this fraction faster than the slowest hit that
-        sinks.
+        ``"minimal_speed"``: the teacher hits this fraction faster than the slowest gain that
+        sinks over an angle interval of ``min_width``.
+    min_width : float
+        ``"minimal_speed"``: the angle interval [deg] that must sink at the slowest gain
+        (thinner tails of a success region are left out: they come and go with the search
+        grid's resolution).
     tolerance : (float, float)
         ``"centre"``: the execution errors (sigma of alpha [deg], sigma of kappa) the centre
         of a success region is measured against.
@@ -175,6 +183,7 @@ class Teacher:
     engine: str = "auto"
     banks: bool | None = None
     speed_margin: float = 0.03
+    min_width: float = 1.0
     tolerance: tuple = (1.0, 0.03)
     _fixed: float = field(init=False, default=0.0, repr=False)
 
@@ -199,6 +208,8 @@ class Teacher:
             raise ValueError(f"resolution must be at least (3, 3), got {self.resolution}")
         if not 0 <= self.speed_margin < 1:
             raise ValueError(f"speed_margin must be in [0, 1), got {self.speed_margin}")
+        if not (np.isfinite(self.min_width) and self.min_width > 0):
+            raise ValueError(f"min_width must be positive [deg], got {self.min_width}")
         if not (len(self.tolerance) == 2 and min(self.tolerance) > 0):
             raise ValueError(f"tolerance must be two positive numbers (sigma of alpha [deg], "
                              f"sigma of kappa), got {self.tolerance}")
@@ -270,8 +281,15 @@ class Teacher:
             kappa, guess = self._centre(comp, alphas, kappas)
         span = 4 * (alphas[1] - alphas[0])
         cols = np.flatnonzero(comp.any(axis=0))
-        a = self._middle(ball, hole, kappa, guess, alphas[cols[0]] - span,
-                         alphas[cols[-1]] + span)
+        lo, hi = alphas[cols[0]] - span, alphas[cols[-1]] + span
+        # at the minimal speed a bent region can cross the gain's row more than once (its
+        # slow tip curls back): the widest crossing is the region's main band
+        widest = self.strategy == "minimal_speed"
+        a = self._middle(ball, hole, kappa, guess, lo, hi, widest)
+        if not np.isfinite(a) and self.strategy == "minimal_speed":
+            # the margin left the region (a small one): its slowest wide gain itself
+            kappa /= 1 + self.speed_margin
+            a = self._middle(ball, hole, kappa, guess, lo, hi, widest)
         return (a, kappa) if np.isfinite(a) else (np.nan, np.nan)
 
     def _pick_component(self, M, lab, alphas, kappas, ball, hole, reference) -> int:
@@ -299,27 +317,43 @@ class Teacher:
                 np.deg2rad(self.tolerance[0]) / (alphas[1] - alphas[0]))
 
     def _minimal(self, ball, hole, comp, alphas, kappas) -> tuple[float, float]:
-        """``"minimal_speed"``: (1 + margin) times the region's slowest gain, found by
-        bisection between the grid's rows, and the region's angle there (a first guess)."""
+        """``"minimal_speed"``: (1 + margin) times the slowest gain at which the region's
+        widest angle interval is ``min_width`` wide (on the grid, then by bisection between
+        two of its rows on a ten times finer angle grid), and the middle of that interval (a
+        first guess of the angle)."""
         rows = np.flatnonzero(comp.any(axis=1))
-        r0 = rows[0]
         da = alphas[1] - alphas[0]
-        cols = np.flatnonzero(comp[r0:min(r0 + 3, rows[-1] + 1)].any(axis=0))
+        cols = np.flatnonzero(comp.any(axis=0))
         scan = np.arange(alphas[cols[0]] - 3 * da, alphas[cols[-1]] + 3 * da, da / 10)
-        hi = kappas[r0]
-        if r0 > 0:  # (below the search range, its lowest gain is taken)
-            lo = kappas[r0 - 1]
+        need = np.deg2rad(self.min_width)
+
+        def widest(kappa):
+            runs = _runs(self.map(ball, hole, scan, [kappa])[0])
+            if not runs:
+                return 0.0, np.nan
+            a, b = max(runs, key=lambda r: r[1] - r[0])
+            return (b - a) * da / 10, 0.5 * (scan[a] + scan[b - 1])
+
+        grid_width = np.array([max(b - a for a, b in _runs(comp[r])) for r in rows]) * da
+        i = int(rows[np.argmax(grid_width >= need)] if (grid_width >= need).any()
+                else rows[np.argmax(grid_width)])
+        while i < rows[-1] and widest(kappas[i])[0] < need:
+            i += 1
+        while i > 0 and widest(kappas[i - 1])[0] >= need:  # the grid missed a wide row
+            i -= 1
+        hi = kappas[i]
+        if i > 0 and widest(hi)[0] >= need:
+            lo = kappas[i - 1]
             for _ in range(8):  # to (kappa step) / 256, about 1e-4
                 mid = 0.5 * (lo + hi)
-                if self.map(ball, hole, scan, [mid]).any():
+                if widest(mid)[0] >= need:
                     hi = mid
                 else:
                     lo = mid
-        kappa = min(hi * (1 + self.speed_margin), kappas[rows[-1]])
-        i = int(np.argmin(np.abs(kappas - kappa)))
-        i = int(rows[np.argmin(np.abs(rows - i))])
-        guess = float(np.mean(alphas[comp[i]]))
-        return float(kappa), guess
+        guess = widest(hi)[1]
+        if not np.isfinite(guess):
+            guess = float(np.mean(alphas[comp[i]]))
+        return float(hi * (1 + self.speed_margin)), float(guess)
 
     def _centre(self, comp, alphas, kappas) -> tuple[float, float]:
         """``"centre"``: the weighted centre of the top tenth of the blurred region (the hits
@@ -335,10 +369,11 @@ class Teacher:
             kappa, guess = float(kappas[i]), float(alphas[j])
         return kappa, guess
 
-    def _middle(self, ball, hole, kappa: float, guess: float, lo: float, hi: float) -> float:
-        """The middle of the successful angle interval at ``kappa`` that contains ``guess``
-        (else the nearest one), its edges on a grid a tenth of the search's angle step; nan
-        when none sinks."""
+    def _middle(self, ball, hole, kappa: float, guess: float, lo: float, hi: float,
+                widest: bool = False) -> float:
+        """The middle of the successful angle interval at ``kappa`` in [lo, hi] that contains
+        ``guess`` (else the nearest one; with ``widest``, the widest one), its edges on a grid
+        a tenth of the search's angle step; nan when none sinks."""
         alphas, _ = self.grid()
         step = (alphas[1] - alphas[0]) / 10
         lo, hi = max(lo, alphas[0] - 10 * step), min(hi, alphas[-1] + 10 * step)
@@ -348,6 +383,8 @@ class Teacher:
         if not runs:
             return np.nan
         mids = np.array([0.5 * (scan[a] + scan[b - 1]) for a, b in runs])
+        if widest:
+            return float(mids[int(np.argmax([b - a for a, b in runs]))])
         inside = [k for k, (a, b) in enumerate(runs) if scan[a] <= guess <= scan[b - 1]]
         k = inside[0] if inside else int(np.argmin(np.abs(mids - guess)))
         return float(mids[k])
