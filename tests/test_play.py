@@ -38,7 +38,8 @@ def test_play_quick_writes_shots_summary_figures_and_models(quick_run):
     # every column with a unit names it; the hitting angle is in degrees like the learners'
     assert SHOT_COLUMNS == ("method", "shot", "ball_x_m", "ball_y_m", "hole_x_m", "hole_y_m",
                             "alpha_deg", "kappa", "hit", "sunk", "direction_error_deg",
-                            "speed_error", "final_x_m", "final_y_m", "sunk_exudyn")
+                            "speed_error", "final_x_m", "final_y_m", "sunk_exudyn",
+                            "strategy")
     assert {row["method"] for row in rows} == {"gpr", "gmr"} and len(rows) == 6
     for row in rows:
         assert row["hit"] in ("True", "False") and row["sunk"] in ("True", "False")
@@ -91,6 +92,27 @@ def test_play_draws_its_shots_from_the_fields_declared_situations(tmp_path):
     assert res["success"]["gpr"] >= 2 / 3
 
 
+def test_play_with_several_strategies_names_each_shots_strategy(tmp_path):
+    # the paper's Section 8 extension: several strategies explored and clustered, one model
+    # per strategy, the most promising played; the ridge's 20 situations keep it short
+    ridge = Path(__file__).resolve().parent / "fields" / "ridge.json"
+    out = tmp_path / "s"
+    r = _run("play", "--quick", "--field", str(ridge), "--strategies", "2", "--learner", "gpr",
+             "--validate", "0", "--out", str(out))
+    assert r.returncode == 0, r.stderr[-3000:]
+    assert "2 strategies on ridge" in r.stdout and "strategy 0: direct" in r.stdout
+    with open(out / "shots.csv") as fh:
+        rows = list(csv.DictReader(fh))
+    assert len(rows) == 3 and all(row["strategy"] in ("0", "1") for row in rows)
+    assert (out / "strategies.png").stat().st_size > 1000
+    assert (out / "models" / "strategies_ridge.npz").exists()
+    assert "strategy" in (out / "summary.txt").read_text()
+    # the saved strategies are reused
+    r = _run("play", "--quick", "--field", str(ridge), "--strategies", "2", "--learner", "gpr",
+             "--validate", "0", "--models", str(out / "models"), "--out", str(tmp_path / "t"))
+    assert r.returncode == 0 and "reused 2 strategies" in r.stdout
+
+
 def test_declared_situations_the_robot_cannot_reach_are_named_before_teaching(tmp_path):
     # a sinkhole 1 m deep in the middle of the ball region: the WAM beside the ball cannot
     # put its club there; play says so (which ball positions, what to change) and stops
@@ -125,6 +147,14 @@ def test_play_config_checks_its_values_and_takes_overrides():
         PlayConfig(workers=0)
     with pytest.raises(ValueError, match="at least one learner"):
         PlayConfig(learners=())
+    assert PlayConfig(strategies="3").strategies == 3
+    assert PlayConfig(strategies="auto").strategies == "auto"
+    with pytest.raises(ValueError, match="strategies must be 'auto' or a whole number"):
+        PlayConfig(strategies="some")
+    with pytest.raises(ValueError, match="strategies must be at least 1"):
+        PlayConfig(strategies=0)
+    with pytest.raises(ValueError, match="leave it out with strategies"):
+        PlayConfig(strategies="auto", train_size=10)
     # overrides are checked before any work
     with pytest.raises(TypeError, match="no setting 'robots'; valid: robot, field"):
         play(robots="wam")

@@ -183,6 +183,11 @@ def _add_play(sub, quiet) -> None:
     pl.add_argument("--workers", type=int, default=1, help="local worker processes [1]")
     pl.add_argument("--dask", default=None, metavar="ADDRESS",
                     help="play the shots on a Dask scheduler (tcp://host:8786)")
+    pl.add_argument("--strategies", default=None, metavar="auto|N",
+                    help="several strategies (the paper's Section 8): explore every way to "
+                         "sink the ball, keep those in half the situations (auto) or the N "
+                         "most widespread, and play the one most likely to succeed [one "
+                         "strategy, the teacher's]")
     pl.add_argument("--train-size", type=int, default=None, metavar="N",
                     help="train the learners on N equally spaced situations of the teacher's "
                          "data set (as Table 1's equally spaced rows) [all]")
@@ -263,7 +268,8 @@ def _cmd_play(a) -> int:
     play(PlayConfig(robot=a.robot, field=a.field, demos=a.demos, learners=tuple(a.learner),
                     shots=a.shots, seed=a.seed, out=a.out, models=a.models, quick=a.quick,
                     validate_shots=a.validate, workers=a.workers, dask=a.dask,
-                    train_size=a.train_size, progress=not a.quiet))
+                    train_size=a.train_size, strategies=a.strategies,
+                    progress=not a.quiet))
     return 0
 
 

@@ -13,6 +13,14 @@
    field's ball model. Shots are independent tasks: local processes or a Dask cluster.
 5. **Validation**: the first few shots again in exudyn (arm, club face, ball on the mesh).
 
+With ``strategies`` (``--strategies auto|N``, the paper's Section 8 extension) step 2 explores
+every successful way to play the teacher's situations, bank shots included, and clusters them
+into strategies (:mod:`seds_casadi.minigolf.strategies`); step 3 fits one model per strategy
+and learner and a model of each strategy's robustness; step 4 plays, at each situation, the
+strategy most likely to succeed (:mod:`seds_casadi.minigolf.strategy_choice`). ``shots.csv``
+then names the strategy of each shot and ``strategies.png`` shows the strategies on the
+success map of the first situation (Fig. 4a, coloured).
+
 Everything learned is saved in ``OUT/models`` (the motion as ``.npz`` files, the teacher's data
 set); ``--models DIR`` reuses them and skips steps 1-2 (the learners of step 3 are refitted from
 the saved data set: they take well under a second). Settings are a :class:`PlayConfig`;
@@ -31,7 +39,7 @@ import numpy as np
 from ..core._io import atomic_csv, atomic_text
 from ..minigolf._progress import progress_bar
 from ._config import names_tuple, whole_number, with_overrides
-from .reach import check_reach
+from .reach import check_reach, fastest_gain
 
 __all__ = ["play", "play_shot", "PlayConfig", "SHOT_COLUMNS", "LEARNERS"]
 
@@ -41,7 +49,7 @@ _LOG = logging.getLogger(__name__)
 #: (kappa, the gain; speed_error, relative to the commanded speed)
 SHOT_COLUMNS = ("method", "shot", "ball_x_m", "ball_y_m", "hole_x_m", "hole_y_m", "alpha_deg",
                 "kappa", "hit", "sunk", "direction_error_deg", "speed_error", "final_x_m",
-                "final_y_m", "sunk_exudyn")
+                "final_y_m", "sunk_exudyn", "strategy")
 LEARNERS = ("gpr", "gmr")
 _VALID_LEARNERS = ("gpr", "gmr", "sep_gmr")
 
@@ -73,6 +81,9 @@ class PlayConfig:
     train_size : int or None
         Train the learners on this many equally spaced situations of the teacher's data set
         (Table 1's ``"equally spaced"`` kind); None: all of them.
+    strategies : "auto", int or None
+        Several strategies (module docstring): ``"auto"`` keeps those found in at least half
+        the situations, N the N most widespread; None: the teacher's one strategy.
     validate_shots : int
         Shots checked again in exudyn (0: none).
     workers : int
@@ -97,6 +108,7 @@ class PlayConfig:
     dask: str | None = None
     progress: bool = True
     train_size: int | None = None
+    strategies: str | int | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "learners", names_tuple("learner", self.learners,
@@ -109,6 +121,20 @@ class PlayConfig:
         if self.train_size is not None:
             object.__setattr__(self, "train_size", whole_number("train_size", self.train_size,
                                                                 2))
+        if self.strategies is not None:
+            s = self.strategies
+            if isinstance(s, str) and s != "auto":
+                try:
+                    s = int(s)
+                except ValueError:
+                    raise ValueError(f"strategies must be 'auto' or a whole number, got "
+                                     f"{self.strategies!r}") from None
+            if s != "auto":
+                s = whole_number("strategies", s, 1)
+            object.__setattr__(self, "strategies", s)
+            if self.train_size is not None:
+                raise ValueError("train_size picks equally spaced situations of one strategy's "
+                                 "data set; leave it out with strategies")
 
     def effective(self) -> PlayConfig:
         """The settings actually played: ``quick`` caps the shots and the exudyn checks."""
@@ -144,7 +170,8 @@ def play_shot(task: dict) -> dict:
     ball, hole = np.asarray(task["ball"]), np.asarray(task["hole"])
     robot = place_robot(task["robot"], ball, field)
     z = float(field.surface.height(ball[None])[0]) + BALL_RADIUS
-    row = {"method": task["method"], "shot": task["shot"], "ball_x_m": ball[0],
+    row = {"method": task["method"], "shot": task["shot"], "strategy": task.get("strategy", ""),
+           "ball_x_m": ball[0],
            "ball_y_m": ball[1], "hole_x_m": hole[0], "hole_y_m": hole[1],
            "alpha_deg": float(np.rad2deg(task["alpha"])), "kappa": task["kappa"], "hit": False,
            "sunk": False, "direction_error_deg": np.nan, "speed_error": np.nan,
@@ -172,7 +199,7 @@ def _situations(field, n: int, rng):
     return field.situations.sample(n, rng)
 
 
-def _reuse_models(models: str, fld):
+def _reuse_models(models: str, fld, strategies=None):
     """Steps 1-2 from an earlier run's ``models/`` folder."""
     from ..minigolf.teacher import HittingDataset
     from ..motion.hitting import HittingMotion
@@ -187,13 +214,23 @@ def _reuse_models(models: str, fld):
     motion = HittingMotion.load(src_motion)
     data = HittingDataset.load(src_data)
     _LOG.info("reused the hitting motion and %d good shots from %s", len(data), models)
-    return motion, data
+    if not strategies:
+        return motion, data, None
+    from ..minigolf.strategies import StrategySet
+
+    src = os.path.join(models, f"strategies_{fld.name}.npz")
+    if not os.path.exists(src):
+        raise ValueError(f"--models {models}: no strategies_{fld.name}.npz there; run play "
+                         f"--strategies once without --models to explore them")
+    ss = StrategySet.load(src)
+    _LOG.info("reused %d strategies:\n%s", len(ss), ss.describe())
+    return motion, data, ss
 
 
 def _learn_and_teach(cfg: PlayConfig, fld, times: dict):
     """Steps 1-2: the hitting motion from the demonstrations, the teacher's good shots."""
     from ..core.demonstrations import load_demonstrations
-    from ..minigolf.teacher import Stroke, collect_dataset
+    from ..minigolf.teacher import Stroke, collect_dataset, paper_situations
     from ..motion.hitting import HittingMotion
     from ..motion.putting_demos import load_hitting_demos
 
@@ -205,12 +242,34 @@ def _learn_and_teach(cfg: PlayConfig, fld, times: dict):
               times["hitting motion (SEDS + GMR)"])
     t1 = time.perf_counter()
     _check_declared_reach(cfg.robot, fld, motion)
-    data = collect_dataset(fld, Stroke.from_motion(motion), progress=cfg.progress,
-                           **({"resolution": (81, 26)} if cfg.quick else {}))
+    stroke = Stroke.from_motion(motion)
+    fastest = fastest_gain(cfg.robot, fld, motion)
+    _LOG.info("the %s swings within 2 %% of the commanded speed up to kappa %.2f (%.2f m/s)",
+              cfg.robot, fastest, fastest * motion.hitting_speed)
+    if cfg.strategies is not None:
+        from ..minigolf.strategies import explore
 
+        # a strategy the robot cannot swing fast enough for is none of its strategies
+        lo, hi = fld.teacher.get("kappa_range", (0.6, 2.4))
+        ss = explore(fld, stroke, *paper_situations(fld), n_strategies=cfg.strategies,
+                     kappa_range=(lo, max(lo + 0.05, min(hi, fastest))),
+                     progress=cfg.progress,
+                     **({"resolution": (151, 37)} if cfg.quick else {}))
+        times["exploring strategies"] = time.perf_counter() - t1
+        _LOG.info("%d strategies on %s (of %d found; %.1f s):\n%s", len(ss), fld.name,
+                  ss.settings["found"], times["exploring strategies"], ss.describe())
+        return motion, ss.dataset(), ss
+    data = collect_dataset(fld, stroke, progress=cfg.progress,
+                           **({"resolution": (81, 26)} if cfg.quick else {}))
     times["teacher"] = time.perf_counter() - t1
     _LOG.info("teacher: %d good shots on %s (%.1f s)", len(data), fld.name, times["teacher"])
-    return motion, data
+    fast = int(np.sum(data.kappa > fastest))
+    if fast:
+        _LOG.warning("%d of the teacher's %d shots on %s need kappa above %.2f, faster than the "
+                     "%s swings accurately (up to %.2f): they will be played too slowly; give "
+                     "the field's teacher a lower kappa_range or another robot", fast,
+                     len(data), fld.name, fastest, cfg.robot, data.kappa.max())
+    return motion, data, None
 
 
 def _check_declared_reach(robot: str, fld, motion) -> None:
@@ -226,11 +285,18 @@ def _check_declared_reach(robot: str, fld, motion) -> None:
                 "declared ball positions")
 
 
-def _fit_learners(data, learners, train_size=None) -> dict:
+def _fit_learners(data, learners, train_size=None, strategies=None) -> dict:
     """Step 3: each hitting-parameter learner on the teacher's data set (or ``train_size``
-    equally spaced situations of it)."""
+    equally spaced situations of it); with ``strategies``, a
+    :class:`~seds_casadi.minigolf.strategy_choice.StrategyChoice` per learner."""
     from ..minigolf.parameters import make_model
     from ..minigolf.table1 import N_COMPONENTS, training_indices
+
+    if strategies is not None:
+        from ..minigolf.strategy_choice import StrategyChoice
+
+        return {m: StrategyChoice(m, n_components=N_COMPONENTS[2]).fit(strategies)
+                for m in learners}
 
     S, Y = data.situations, data.outputs
     if train_size is not None and train_size < len(data):
@@ -244,12 +310,18 @@ def _fit_learners(data, learners, train_size=None) -> dict:
 def _round_tasks(cfg: PlayConfig, fld, data, fitted: dict, balls, holes,
                  motion_dir: str) -> list[dict]:
     """Step 4's tasks: each learner's (alpha, kappa) for each situation (:func:`play_shot`)."""
+    from ..minigolf.strategy_choice import StrategyChoice
+
     tasks = []
     for m, model in fitted.items():
-        pred = model.predict(holes - balls)
+        if isinstance(model, StrategyChoice):
+            pred, labels, _ = model.predict(holes - balls, return_choice=True)
+        else:
+            pred, labels = model.predict(holes - balls), [""] * len(balls)
         for i in range(len(balls)):
             kappa = float(pred[i, 1]) if pred.shape[1] > 1 else float(data.kappa[0])
-            tasks.append({"method": m, "shot": i, "ball": balls[i].tolist(),
+            tasks.append({"method": m, "shot": i, "strategy": labels[i],
+                          "ball": balls[i].tolist(),
                           "hole": holes[i].tolist(), "alpha": float(np.deg2rad(pred[i, 0])),
                           "kappa": kappa, "robot": cfg.robot, "field": fld.name,
                           "field_spec": fld.spec, "motion": os.path.abspath(motion_dir)})
@@ -287,7 +359,13 @@ def _summary(cfg: PlayConfig, fld, rows: list[dict], n_situations: int, times: d
              for m in cfg.learners}
     checked = [r for r in rows if r["sunk_exudyn"] != ""]
     lines = [f"played {n_situations} situations on {fld.name} with the {cfg.robot}"]
-    lines += [f"  {m}: {rates[m]:.0%} sunk" for m in cfg.learners]
+    for m in cfg.learners:
+        lines.append(f"  {m}: {rates[m]:.0%} sunk")
+        mine = [r for r in rows if r["method"] == m and r["strategy"] != ""]
+        for k in sorted({r["strategy"] for r in mine}):
+            rk = [r for r in mine if r["strategy"] == k]
+            lines.append(f"    strategy {k}: played {len(rk)} times, "
+                         f"{np.mean([r['sunk'] for r in rk]):.0%} sunk")
     if checked:
         agree = np.mean([r["sunk"] == r["sunk_exudyn"] for r in checked])
         lines.append(f"  exudyn agreed with the ball model on {agree:.0%} of "
@@ -325,14 +403,16 @@ def play(config: PlayConfig | None = None, **overrides) -> dict:
     times: dict[str, float] = {}
     rng = np.random.default_rng(cfg.seed)
     motion_dir = os.path.join(cfg.out, "models", "motion")
-    motion, data = (_reuse_models(cfg.models, fld) if cfg.models
-                    else _learn_and_teach(cfg, fld, times))
+    motion, data, strategies = (_reuse_models(cfg.models, fld, cfg.strategies) if cfg.models
+                                else _learn_and_teach(cfg, fld, times))
     check_reach(cfg.robot, fld, data.ball, data.alpha, motion.hitting_direction,
                 "situations the teacher taught")
     motion.save(motion_dir)
     data.save(os.path.join(cfg.out, "models", f"dataset_{fld.name}.npz"))
+    if strategies is not None:
+        strategies.save(os.path.join(cfg.out, "models", f"strategies_{fld.name}.npz"))
     t2 = time.perf_counter()
-    fitted = _fit_learners(data, cfg.learners, cfg.train_size)
+    fitted = _fit_learners(data, cfg.learners, cfg.train_size, strategies)
     times["hitting-parameter models"] = time.perf_counter() - t2
     t3 = time.perf_counter()
     balls, holes = _situations(fld, cfg.shots, rng)
@@ -348,6 +428,8 @@ def play(config: PlayConfig | None = None, **overrides) -> dict:
     rates, text = _summary(cfg, fld, rows, len(balls), times)
     atomic_text(os.path.join(cfg.out, "summary.txt"), text)
     _figures(fld, motion, data, fitted, rows, cfg.learners, cfg.out)
+    if strategies is not None:
+        _strategy_figure(fld, strategies, rows, cfg.learners[0], cfg.out)
     _LOG.info("%s", text.rstrip("\n"))
     _LOG.info("wrote %s, summary.txt, figures and models/ in %s",
               os.path.join(cfg.out, "shots.csv"), cfg.out)
@@ -381,14 +463,40 @@ def _figures(fld, motion, data, fitted, rows, learners, out) -> None:
     ax.set_aspect("equal")
     ax.set_title("the learned hitting motion (Eq. 14) for alpha = 0, +-0.3 rad", fontsize=9)
     save_figure(fig, os.path.join(out, "motion.png"))
-    # the hitting-parameter models against the teacher's data
+    # the hitting-parameter models against the teacher's data (each strategy's own model)
+    from ..minigolf.strategy_choice import StrategyChoice
+
     fig, ax = plt.subplots(figsize=(6, 4.5))
     y = data.outputs[:, 0]
     for m, model in fitted.items():
-        ax.plot(y, model.predict(data.situations)[:, 0], "o", ms=4, label=m)
+        if isinstance(model, StrategyChoice):
+            pred = np.empty(len(y))
+            for k in np.unique(data.labels):
+                sel = data.labels == k
+                pred[sel] = model.predict_strategy(data.situations[sel], int(k))[:, 0]
+        else:
+            pred = model.predict(data.situations)[:, 0]
+        ax.plot(y, pred, "o", ms=4, label=m)
     ax.plot([y.min(), y.max()], [y.min(), y.max()], "k-", lw=0.8)
     ax.set_xlabel("teacher's hitting angle [deg]")
     ax.set_ylabel("model's hitting angle [deg]")
     ax.legend(fontsize=8)
     ax.set_title("hitting-parameter models on the teacher's data", fontsize=9)
     save_figure(fig, os.path.join(out, "hitting_parameters.png"))
+
+
+def _strategy_figure(fld, strategies, rows, learner: str, out: str) -> None:
+    """``strategies.png``: Fig. 4a of the first situation played, its success regions coloured
+    by strategy, and each strategy's shot from there; the one ``learner`` chose marked."""
+    from .plotting import _plt, plot_strategies, save_figure
+
+    first = next(r for r in rows if r["method"] == learner)
+    ball = np.array([first["ball_x_m"], first["ball_y_m"]])
+    hole = np.array([first["hole_x_m"], first["hole_y_m"]])
+    fig, (a1, a2) = _plt().subplots(1, 2, figsize=(13, 4.6),
+                                     gridspec_kw={"width_ratios": [1, 1.4]})
+    plot_strategies(fld, strategies.stroke, strategies, ball, hole, a1, a2,
+                    chosen=first["strategy"])
+    a2.set_title(f"each strategy's centre shot from this ball; {learner} chose strategy "
+                 f"{first['strategy']} (thick)", fontsize=9)
+    save_figure(fig, os.path.join(out, "strategies.png"))

@@ -12,7 +12,12 @@ import os
 import numpy as np
 
 __all__ = ["plot_streamlines", "save_figure", "plot_success_map", "plot_regression_1d",
-           "plot_joint_gmm", "plot_field", "plot_arm_frames"]
+           "plot_joint_gmm", "plot_field", "plot_arm_frames", "plot_strategies",
+           "STRATEGY_COLOURS"]
+
+#: colours of strategies 0, 1, 2, ... in the strategy figures
+STRATEGY_COLOURS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#9467bd", "#8c564b", "#e377c2",
+                    "#17becf", "#bcbd22")
 
 
 def _plt():
@@ -129,6 +134,87 @@ def plot_success_map(success: np.ndarray, alphas, kappas, ax=None, title=None, c
     if title:
         ax.set_title(title, fontsize=9)
     return ax
+
+
+def plot_strategies(field, stroke, strategies, ball, hole, ax_map=None, ax_field=None,
+                    resolution=None, chosen=None):
+    """Fig. 4a with the strategies coloured: the success map of one situation over (alpha,
+    kappa) with bank shots, each successful region coloured by the strategy it belongs to
+    (grey: a region of none of the kept strategies; red: no success), the regions' centre shots
+    numbered; and the ball paths of those shots on the field.
+
+    Parameters
+    ----------
+    field : Field
+    stroke : Stroke
+    strategies : StrategySet
+    ball, hole : array, shape (2,)
+    resolution : (int, int), optional
+        Grid of the map (default: the exploration's).
+    chosen : int, optional
+        A strategy's label to mark as the one played (thick path, starred shot).
+
+    Returns
+    -------
+    (ax_map, ax_field)
+    """
+    from matplotlib.colors import ListedColormap
+
+    from ..minigolf.ball import simulate_shots
+    from ..minigolf.strategies import explore_situation
+
+    plt = _plt()
+    if ax_map is None or ax_field is None:
+        _, (ax_map, ax_field) = plt.subplots(1, 2, figsize=(13, 4.2),
+                                             gridspec_kw={"width_ratios": [1, 1.4]})
+    st = strategies.settings
+    res = resolution or st.get("resolution", (301, 73))
+    alphas = np.deg2rad(np.linspace(*st.get("alpha_range", (-75, 75)), int(res[0])))
+    kappas = np.linspace(*st.get("kappa_range", (0.6, 2.4)), int(res[1]))
+    regions = explore_situation(field, stroke, ball, hole, alphas, kappas,
+                                st.get("tolerance", (1.0, 0.03)), st.get("min_cells", 4),
+                                keep_masks=True)
+    labels = strategies.label_regions(ball, hole, regions)
+    n = len(strategies.strategies)
+    img = np.zeros((len(kappas), len(alphas)), int)  # 0 failure, 1 other region, 2 + label
+    for r, lab in zip(regions, labels):
+        img[r.mask] = 1 if lab is None else 2 + lab
+    colours = ["#f2b8b5", "0.6"] + [STRATEGY_COLOURS[k % len(STRATEGY_COLOURS)]
+                                    for k in range(n)]
+    ax_map.pcolormesh(np.rad2deg(alphas), kappas, img, shading="nearest",
+                      cmap=ListedColormap(colours), vmin=-0.5, vmax=len(colours) - 0.5)
+    shots = []
+    for r, lab in zip(regions, labels):
+        if lab is None:
+            continue
+        c = STRATEGY_COLOURS[lab % len(STRATEGY_COLOURS)]
+        ax_map.plot(np.rad2deg(r.alpha), r.kappa, "*" if lab == chosen else "o", color="k",
+                    mfc=c, ms=12 if lab == chosen else 7)
+        ax_map.annotate(str(lab), (np.rad2deg(r.alpha), r.kappa), textcoords="offset points",
+                        xytext=(6, 4), fontsize=8)
+        shots.append((lab, r))
+    handles = [plt.Line2D([], [], ls="", marker="s", ms=9, color=STRATEGY_COLOURS[
+        s.label % len(STRATEGY_COLOURS)], label=s.describe()) for s in strategies.strategies]
+    handles.append(plt.Line2D([], [], ls="", marker="s", ms=9, color="0.6",
+                              label="other successful regions"))
+    ax_map.legend(handles=handles, fontsize=6.5, loc="upper center",
+                  bbox_to_anchor=(0.5, -0.16), ncol=1)
+    ax_map.set_xlabel("hitting angle alpha [deg]")
+    ax_map.set_ylabel("speed gain kappa")
+    ax_map.set_title(f"Fig. 4a with strategies: ball {np.round(ball, 2).tolist()}, hole "
+                     f"{np.round(hole, 2).tolist()}", fontsize=9)
+    plot_field(field, ax=ax_field, ball=ball, hole=hole)
+    if shots:
+        A = np.array([r.alpha for _, r in shots])
+        K = np.array([r.kappa for _, r in shots])
+        res_paths = simulate_shots(field, np.tile(np.asarray(ball, float), (len(A), 1)),
+                                   stroke.launch_velocity(A, K), hole=hole, engine="numpy",
+                                   record_paths=True)
+        for (lab, _), path in zip(shots, res_paths.paths):
+            ax_field.plot(path[:, 0], path[:, 1], "-", lw=3 if lab == chosen else 1.5,
+                          color=STRATEGY_COLOURS[lab % len(STRATEGY_COLOURS)])
+    ax_field.set_title("each strategy's centre shot from this ball", fontsize=9)
+    return ax_map, ax_field
 
 
 def plot_regression_1d(x, y, train, models: dict, ax_row=None, xlabel="s_y [m]",

@@ -5,13 +5,16 @@ The robot stands at its default place beside each ball
 swing (0.3 m behind the ball, 5 cm up, turned by alpha: the default of
 :func:`~seds_casadi.robots.control.simulate_swing`) where the club head cannot be placed, makes
 those situations unplayable. :func:`check_reach` names them and says what to change.
+:func:`fastest_gain` measures how fast the robot can swing: the largest speed gain kappa it
+executes within 2 % of the commanded club speed (its joint velocity and torque limits cap the
+rest).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["unreachable", "check_reach"]
+__all__ = ["unreachable", "check_reach", "fastest_gain"]
 
 _START = np.array([-0.3, 0.0, 0.05])  # simulate_swing's default start, relative to the contact
 
@@ -65,3 +68,35 @@ def check_reach(robot: str, field, balls, alphas, direction, what: str) -> None:
     raise ValueError(f"the {robot} cannot play {len(bad)} of {len(np.atleast_2d(balls))} "
                      f"{what} on {field.name}: {shown}{more}. Declare situations it can reach "
                      f"(the field file's 'situations' or 'ball_region'), or use another robot")
+
+
+def fastest_gain(robot: str, field, motion, ball=None, tolerance: float = 0.02,
+                 kappa_range=(0.2, 2.4), iterations: int = 7) -> float:
+    """The largest speed gain the robot swings within ``tolerance`` of the commanded club
+    speed (Eq. 14's kappa v*), found by bisection over ``kappa_range`` with swings on the
+    robot's dynamics (:func:`~seds_casadi.robots.control.simulate_swing`; a straight swing at
+    ``ball``, default the middle of the declared ball positions). Returns the range's low end
+    when even that is too fast, its high end when nothing in it is."""
+    from ..minigolf.ball import BALL_RADIUS
+    from ..robots.control import place_robot, simulate_swing
+
+    if ball is None:
+        ball = field.situations.ball.design(9)[4 if field.situations.ball.kind != "fixed"
+                                               else 0]
+    b = np.asarray(ball, float)
+    z = float(field.surface.height(b[None])[0]) + BALL_RADIUS
+
+    def ok(kappa):
+        sw = simulate_swing(place_robot(robot, b, field), motion, np.array([b[0], b[1], z]),
+                            0.0, float(kappa))
+        return sw.hit and sw.speed_error <= tolerance
+
+    lo, hi = (float(v) for v in kappa_range)
+    if ok(hi):
+        return hi
+    if not ok(lo):
+        return lo
+    for _ in range(int(iterations)):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if ok(mid) else (lo, mid)
+    return lo

@@ -1,9 +1,11 @@
-"""Minigolf: fields (``fields``, shipped and the user's own JSON files; their ``surface``), the
-ball model (``ball``: rolling, skidding, walls, hole capture and the numpy reference;
-``ball_kernel``: the compiled engine), the hit (``stroke``), the teacher that finds good shots
-(``teacher``) and its data sets (``hitting_data``), the hitting-parameter learners
-(``parameters``: GPR, GMR) and the protocol of the paper's Table 1 (``table1``). It imports
-:mod:`seds_casadi.motion`, :mod:`seds_casadi.core` and :mod:`seds_casadi.codegen`.
+"""Minigolf: fields (``fields``, shipped and the user's own JSON files; their ``surface`` and
+the ``situations`` they declare), the ball model (``ball``: rolling, skidding, walls, hole
+capture and the numpy reference; ``ball_kernel``: the compiled engine), the hit (``stroke``),
+the teacher that finds good shots (``teacher``) and its data sets (``hitting_data``), the
+hitting-parameter learners (``parameters``: GPR, GMR), the protocol of the paper's Table 1
+(``table1``) and several strategies (``strategies``: explored and clustered;
+``strategy_choice``: the one most likely to succeed). It imports :mod:`seds_casadi.motion`,
+:mod:`seds_casadi.core` and :mod:`seds_casadi.codegen`.
 """
 
 from .ball import ShotResult, impact, simulate_shots

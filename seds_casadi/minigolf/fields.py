@@ -32,10 +32,11 @@ one hole radius inside the bounds; the ball and the hole may both move only on a
 
 **Teacher** (``"teacher"``, all entries optional; see :class:`~seds_casadi.minigolf.teacher.
 Teacher`): ``strategy``, one of :data:`TEACHER_STRATEGIES` (``"fixed_speed"``: one speed gain
-for every situation, the hitting angle chosen; ``"minimal_speed"``: the slowest hits that sink,
-with a small margin; ``"centre"``: the hit farthest inside its success region; default
-``"centre"``), ``kappa`` (the fixed speed gain), ``alpha_range`` [deg] and ``kappa_range``
-(the search box) and ``banks`` (whether shots off a wall count, default false).
+for every situation, the hitting angle chosen; ``"minimal_speed"``: the slowest hits that sink
+(over a 1 deg interval of angles), with a 3 % margin; ``"centre"``: the hit farthest inside its
+success region; default ``"centre"``), ``kappa`` (the fixed speed gain), ``alpha_range`` [deg]
+and ``kappa_range`` (the search box) and ``banks`` (whether shots off a wall count, default
+false).
 
 Surface shapes (``"shape"`` and its parameters):
 
