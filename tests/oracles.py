@@ -112,7 +112,13 @@ def unpack(theta: np.ndarray, layout, margin: float) -> dict:
         if Q is not None:
             LQ = _tril(layout, theta[s["Q"]])
             Q[k] = LQ @ LQ.T
-    out = {"priors": priors, "mu": mu, "Sx": Sx, "A": A}
+    P = np.eye(d)
+    if getattr(layout, "lyapunov", "identity") == "learned":  # A_k = P^-1 S_k, P = d M / tr M
+        LP = _tril(layout, theta[layout.size - layout.n_tril:])
+        M = LP @ LP.T
+        P = d * M / np.trace(M)
+        A = np.stack([np.linalg.solve(P, A[k]) for k in range(K)])
+    out = {"priors": priors, "mu": mu, "Sx": Sx, "A": A, "P": P}
     if Q is not None:
         out["Q"] = Q
     return out

@@ -397,8 +397,8 @@ def _resolve_k(shape: str, n_components, train: DsOptSet, k_max: int, random_sta
 
 def evaluate_shape_dsopt(shape: str, objective: str = "mse", n_components: int | str = "bic",
                          k_max: int = 15, random_state: int = 0, bic_rule: str = "ds-opt",
-                         max_iter: int = 1000,
-                         figure_path: str | None = None) -> list[DsOptResult]:
+                         max_iter: int = 1000, figure_path: str | None = None,
+                         seds_options: dict | None = None) -> list[DsOptResult]:
     """Fit one shape under the ds-opt protocol and score it on the training and test sets.
 
     Parameters
@@ -418,6 +418,8 @@ def evaluate_shape_dsopt(shape: str, objective: str = "mse", n_components: int |
         IPOPT's iteration limit.
     figure_path : str, optional
         Write a figure (test demonstrations, their reproductions, streamlines) there.
+    seds_options : dict, optional
+        More options of :class:`~seds_casadi.SEDS` (e.g. ``{"lyapunov": "learned"}``).
 
     Returns
     -------
@@ -431,11 +433,11 @@ def evaluate_shape_dsopt(shape: str, objective: str = "mse", n_components: int |
     t0 = time.perf_counter()
     with warnings.catch_warnings():  # the status is recorded and counted in the summary
         warnings.simplefilter("ignore", ConvergenceWarning)
-        model = SEDS(K, objective=objective, random_state=random_state,
-                     max_iter=max_iter).fit(sets["train"].demonstrations()).model_
+        model = SEDS(K, objective=objective, random_state=random_state, max_iter=max_iter,
+                     **(seds_options or {})).fit(sets["train"].demonstrations()).model_
     seconds = time.perf_counter() - t0
     cert = model.certificate
-    certified = bool(cert["max_eig_sym_A"] < 0 and cert["min_eig_cov"] > 0)
+    certified = bool(cert["max_eig_lyapunov"] < 0 and cert["min_eig_cov"] > 0)
     rate = float(max(np.abs(np.linalg.eigvals(A)).max() for A in model.A))
     pub = PUBLISHED_SEDS[shape]
     rows, paths = [], {}

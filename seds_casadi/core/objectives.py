@@ -37,7 +37,8 @@ def sample_objective(layout: Layout, objective: str, margin: float) -> ca.Functi
     * mse: g = c ||f(x) - xdot||^2
     * likelihood: g = -c log sum_k pi_k N(x; mu_k, Sigma_x^k) N(xdot; A_k x, Q_k)
 
-    with f(x) = sum_k h^k(x) A_k x (Eq. 5 in the attractor frame, where mu_xdot^k = A_k mu_x^k).
+    with f(x) = sum_k h^k(x) A_k x (Eq. 5 in the attractor frame, where mu_xdot^k = A_k mu_x^k);
+    in the constrained form f(x) = sum_k h^k(x) (mu_xdot^k + A_k (x - mu_x^k)), Eq. 5 as written.
     """
     K, d = layout.K, layout.d
     theta = ca.SX.sym("theta", layout.size)
@@ -50,6 +51,8 @@ def sample_objective(layout: Layout, objective: str, margin: float) -> ca.Functi
         z = p["Linv"][k] @ (x - p["mu"][k])
         a = p["logpi"][k] - 0.5 * (ca.sumsqr(z) + p["logdet"][k] + d * _LOG_2PI)
         F = p["A"][k] @ x
+        if p["b"]:  # constrained form: mu_xdot + A (x - mu), equal to A x once Eq. 10a holds
+            F = F + p["b"][k]
         if objective == "likelihood":
             r = p["LQinv"][k] @ (xd - F)
             a = a - 0.5 * (ca.sumsqr(r) + p["logdetQ"][k] + d * _LOG_2PI)

@@ -17,6 +17,22 @@ All quantities are in the *scaled attractor frame*: x* at the origin, positions 
 scalar ``sx`` and velocities by one scalar ``sv``. A scalar scaling keeps A_k + A_k^T < 0 (a
 per-axis scaling would not), so the certificate holds in the caller's units too.
 
+Two options change this (:class:`Layout`):
+
+* ``lyapunov="learned"`` (issue 14, the Lyapunov function of LPV-DS inside SEDS): one shared
+  ``P = d M / tr(M)``, ``M = L_P L_P^T`` (``L_P`` lower triangular, positive diagonal; the trace
+  normalisation removes the scale that P and the A_k would otherwise share), and
+  ``A_k = P^-1 S_k`` with ``S_k = -(B_k B_k^T + m I) + (W_k - W_k^T)``. Then
+  ``A_k^T P + P A_k = S_k + S_k^T <= -2 m I`` for every theta, so V(x) = (x - x*)^T P (x - x*)
+  decreases along every trajectory of Eq. 5; with ``P = I`` this is the form above.
+* ``formulation="constrained"`` (the paper's and the original SEDS code's form): the priors
+  ``pi_k`` (bounds (0, 1]), ``mu_x^k``, ``mu_xdot^k`` and the entries of ``A_k`` are free
+  variables and Eq. 10 (a), (b), (e) are constraints of the NLP
+  (:func:`stability_constraints`): (b) as the leading principal minors of
+  ``-(A_k^T P + P A_k) - 2 m I`` (Sylvester's criterion, as the SEDS code does), (a) as
+  ``mu_xdot^k - A_k (mu_x^k - x*) = 0``, (e) as ``sum pi_k = 1``; (c) stays the Cholesky factor
+  with bounded positive diagonal, (d) the bounds. IPOPT's interior-point method handles them.
+
 The parametrization is defined once, in CasADi (:func:`unpack_casadi`); :func:`unpack_numpy`
 evaluates it. The objectives are in :mod:`seds_casadi.core.objectives`; an independent numpy
 implementation of both (a test oracle and the SciPy baseline's objective) is in ``tests/oracles.py``.
@@ -29,9 +45,15 @@ import functools
 import casadi as ca
 import numpy as np
 
-__all__ = ["Layout", "unpack_casadi", "unpack_numpy", "OBJECTIVES"]
+__all__ = ["Layout", "unpack_casadi", "unpack_numpy", "stability_constraints", "OBJECTIVES",
+           "LYAPUNOV", "FORMULATIONS"]
 
 OBJECTIVES = ("direction", "mse", "likelihood")
+LYAPUNOV = ("identity", "learned")
+FORMULATIONS = ("by-construction", "constrained")
+#: the constrained form asks the leading minors of -(A^T P + P A) - 2 m I to be at least this
+#: (scaled units): strictly positive, so a solution within IPOPT's tolerance is still certified
+MINOR_FLOOR = 1e-6
 #: smoothing of the model speed in the cosine of Eq. 9 (scaled units), avoids 0/0 at ||f|| = 0
 DIRECTION_EPS = 1e-8
 
@@ -45,31 +67,55 @@ class Layout:
     n_dims : int
     with_noise : bool
         Include the Cholesky factors of Q_k (the likelihood objective needs them).
+    lyapunov : {"identity", "learned"}
+        V = |x - x*|^2 (SEDS), or a learned P shared by all components (module docstring).
+    formulation : {"by-construction", "constrained"}
+        Eq. 10 satisfied by the parametrization, or stated as NLP constraints.
     """
 
-    def __init__(self, n_components: int, n_dims: int, with_noise: bool) -> None:
+    def __init__(self, n_components: int, n_dims: int, with_noise: bool,
+                 lyapunov: str = "identity", formulation: str = "by-construction") -> None:
+        if lyapunov not in LYAPUNOV:
+            raise ValueError(f"unknown lyapunov {lyapunov!r}; valid: {', '.join(LYAPUNOV)}")
+        if formulation not in FORMULATIONS:
+            raise ValueError(f"unknown formulation {formulation!r}; valid: "
+                             f"{', '.join(FORMULATIONS)}")
         self.K = int(n_components)
         self.d = int(n_dims)
         self.with_noise = bool(with_noise)
+        self.lyapunov = lyapunov
+        self.formulation = formulation
         d = self.d
         self.tril = np.array([(i, j) for i in range(d) for j in range(i + 1)], dtype=int)
         self.strict = np.array([(i, j) for i in range(d) for j in range(i)], dtype=int).reshape(-1, 2)
         self.n_tril = len(self.tril)
         self.n_strict = len(self.strict)
-        per = d + 2 * self.n_tril + self.n_strict + (self.n_tril if with_noise else 0)
-        self.per_component = per
-        self.n_logits = self.K - 1
-        self.size = self.n_logits + self.K * per
+        if formulation == "constrained":
+            self._blocks = (("pi", 1), ("mu", d), ("mud", d), ("L", self.n_tril), ("A", d * d))
+            self.n_logits = 0
+        else:
+            self._blocks = (("mu", d), ("L", self.n_tril), ("B", self.n_tril),
+                            ("W", self.n_strict))
+            self.n_logits = self.K - 1
+        if with_noise:
+            self._blocks += (("Q", self.n_tril),)
+        self.per_component = sum(n for _, n in self._blocks)
+        self.n_lyapunov = self.n_tril if lyapunov == "learned" else 0
+        self.size = self.n_logits + self.K * self.per_component + self.n_lyapunov
+
+    @property
+    def lyapunov_slice(self) -> slice:
+        """Where L_P sits in theta (empty for ``lyapunov="identity"``)."""
+        return slice(self.size - self.n_lyapunov, self.size)
 
     def slices(self, k: int) -> dict[str, slice]:
-        """Slices of component k's blocks in theta: mu, L, B, W (and Q)."""
+        """Slices of component k's blocks in theta: mu, L, B, W (and Q); constrained form:
+        pi, mu, mud, L, A (row-major) (and Q)."""
         o = self.n_logits + k * self.per_component
         out = {}
-        for name, n in (("mu", self.d), ("L", self.n_tril), ("B", self.n_tril), ("W", self.n_strict)):
+        for name, n in self._blocks:
             out[name] = slice(o, o + n)
             o += n
-        if self.with_noise:
-            out["Q"] = slice(o, o + self.n_tril)
         return out
 
     def pack_tril(self, M: np.ndarray) -> np.ndarray:
@@ -98,33 +144,62 @@ def _tril_inverse_sx(L: ca.SX, d: int) -> ca.SX:
     return inv
 
 
+def lyapunov_sx(theta: ca.SX, layout: Layout) -> tuple[ca.SX, ca.SX]:
+    """P = d M / tr(M), M = L_P L_P^T, and its inverse, from theta (learned layouts)."""
+    d = layout.d
+    L = _tril_sx(theta[layout.lyapunov_slice], layout)
+    Linv = _tril_inverse_sx(L, d)
+    tr = ca.sumsqr(L)  # tr(L L^T)
+    return (d / tr) * (L @ L.T), (tr / d) * (Linv.T @ Linv)
+
+
 def unpack_casadi(theta: ca.SX, layout: Layout, margin: float) -> dict:
     """Model pieces from theta as SX: the one definition of the parametrization (module docstring).
 
     Returns a dict of lists over components: ``logpi``, ``mu``, ``L`` (Cholesky factor of
     Sigma_x), ``Linv`` (its inverse), ``logdet`` (log |Sigma_x|), ``A``, and ``LQ``, ``LQinv``,
-    ``logdetQ`` with noise factors.
+    ``logdetQ`` with noise factors; ``P`` (the Lyapunov matrix; None for the identity);
+    constrained form: ``pi`` (raw priors), ``mud`` (mu_xdot) and ``b`` (mu_xdot - A mu_x, zero
+    once Eq. 10a holds).
     """
     K, d = layout.K, layout.d
-    logits = ca.vertcat(theta[: layout.n_logits], 0)
-    top = ca.mmax(logits)
-    lse = ca.log(ca.sum1(ca.exp(logits - top))) + top
-    out = {k: [] for k in ("logpi", "mu", "L", "Linv", "logdet", "A", "LQ", "LQinv", "logdetQ")}
+    constrained = layout.formulation == "constrained"
+    keys = ("logpi", "mu", "L", "Linv", "logdet", "A", "LQ", "LQinv", "logdetQ", "pi", "mud", "b")
+    out = {k: [] for k in keys}
+    P = Pinv = None
+    if layout.lyapunov == "learned":
+        P, Pinv = lyapunov_sx(theta, layout)
+    out["P"] = P
+    if not constrained:
+        logits = ca.vertcat(theta[: layout.n_logits], 0)
+        top = ca.mmax(logits)
+        lse = ca.log(ca.sum1(ca.exp(logits - top))) + top
     diag_pos = [idx for idx, (i, j) in enumerate(layout.tril) if i == j]
     for k in range(K):
         s = layout.slices(k)
-        out["logpi"].append(logits[k] - lse)
         out["mu"].append(theta[s["mu"]])
         Lv = theta[s["L"]]
         L = _tril_sx(Lv, layout)
         out["L"].append(L)
         out["Linv"].append(_tril_inverse_sx(L, d))
         out["logdet"].append(2 * sum(Lv[i] for i in diag_pos))
-        B = _tril_sx(theta[s["B"]], layout)
-        W = ca.SX.zeros(d, d)
-        for idx, (i, j) in enumerate(layout.strict):
-            W[i, j] = theta[s["W"]][idx]
-        out["A"].append(-(B @ B.T + margin * ca.SX.eye(d)) + (W - W.T))
+        if constrained:
+            pi = theta[s["pi"]]
+            out["pi"].append(pi)
+            out["logpi"].append(ca.log(pi))
+            A = ca.reshape(theta[s["A"]], d, d).T  # row-major
+            out["mud"].append(theta[s["mud"]])
+            out["b"].append(theta[s["mud"]] - A @ theta[s["mu"]])
+        else:
+            out["logpi"].append(logits[k] - lse)
+            B = _tril_sx(theta[s["B"]], layout)
+            W = ca.SX.zeros(d, d)
+            for idx, (i, j) in enumerate(layout.strict):
+                W[i, j] = theta[s["W"]][idx]
+            A = -(B @ B.T + margin * ca.SX.eye(d)) + (W - W.T)
+            if Pinv is not None:
+                A = Pinv @ A
+        out["A"].append(A)
         if layout.with_noise:
             Qv = theta[s["Q"]]
             LQ = _tril_sx(Qv, layout)
@@ -134,12 +209,53 @@ def unpack_casadi(theta: ca.SX, layout: Layout, margin: float) -> dict:
     return out
 
 
-@functools.lru_cache(maxsize=64)
-def _unpack_function(K: int, d: int, with_noise: bool, margin: float) -> ca.Function:
-    layout = Layout(K, d, with_noise)
+def _leading_minors_sx(M: ca.SX, d: int) -> list:
+    return [ca.det(M[:i, :i]) for i in range(1, d + 1)]
+
+
+def stability_constraints(layout: Layout, margin: float) -> tuple[ca.Function, np.ndarray,
+                                                                   np.ndarray]:
+    """Eq. 10 (a), (b), (e) as NLP constraints g(theta) with bounds (constrained form).
+
+    (b): the leading principal minors of ``-(A_k^T P + P A_k) - 2 m I`` at least
+    :data:`MINOR_FLOOR` (Sylvester: then it is positive definite, so A_k^T P + P A_k < -2 m I);
+    (a): ``mu_xdot^k - A_k mu_x^k = 0`` (scaled attractor frame, x* = 0); (e): ``sum pi_k = 1``.
+
+    Returns
+    -------
+    g : casadi.Function
+        theta -> the constraint values (minors of every component, then (a), then (e)).
+    lbg, ubg : array
+    """
+    K, d = layout.K, layout.d
     theta = ca.SX.sym("theta", layout.size)
     p = unpack_casadi(theta, layout, margin)
-    outs = [ca.vertcat(*p["logpi"]), *p["mu"], *p["L"], *p["A"]]
+    P = p["P"] if p["P"] is not None else ca.SX.eye(d)
+    minors, eqs = [], []
+    for k in range(K):
+        A = p["A"][k]
+        M = -(A.T @ P + P @ A) - 2 * margin * ca.SX.eye(d)
+        minors += _leading_minors_sx(M, d)
+        eqs.append(p["b"][k])
+    g = ca.vertcat(*minors, *eqs, sum(p["pi"]) - 1)
+    lbg = np.r_[np.full(K * d, MINOR_FLOOR), np.zeros(K * d + 1)]
+    ubg = np.r_[np.full(K * d, np.inf), np.zeros(K * d + 1)]
+    return ca.Function("seds_eq10", [theta], [g]), lbg, ubg
+
+
+@functools.lru_cache(maxsize=64)
+def _unpack_function(K: int, d: int, with_noise: bool, margin: float, lyapunov: str,
+                     formulation: str) -> ca.Function:
+    layout = Layout(K, d, with_noise, lyapunov, formulation)
+    theta = ca.SX.sym("theta", layout.size)
+    p = unpack_casadi(theta, layout, margin)
+    if formulation == "constrained":
+        pri = ca.vertcat(*p["pi"])
+        pri = ca.log(pri / ca.sum1(pri))  # (e) exactly: the projection of the raw priors
+    else:
+        pri = ca.vertcat(*p["logpi"])
+    P = p["P"] if p["P"] is not None else ca.SX.eye(d)
+    outs = [pri, *p["mu"], *p["L"], *p["A"], P]
     if with_noise:
         outs += p["LQ"]
     return ca.Function("unpack", [theta], outs)
@@ -150,16 +266,19 @@ def unpack_numpy(theta: np.ndarray, layout: Layout, margin: float) -> dict[str, 
 
     Returns
     -------
-    dict with ``priors`` (K,), ``mu`` (K, d), ``Sx`` (K, d, d), ``A`` (K, d, d), and ``Q`` (K, d, d)
-    when the layout has noise factors.
+    dict with ``priors`` (K,), ``mu`` (K, d), ``Sx`` (K, d, d), ``A`` (K, d, d), ``P`` (d, d),
+    and ``Q`` (K, d, d) when the layout has noise factors. In the constrained form the priors
+    are normalised to sum 1 (the raw ones satisfy Eq. 10e only to IPOPT's tolerance).
     """
     K, d = layout.K, layout.d
-    f = _unpack_function(K, d, layout.with_noise, float(margin))
+    f = _unpack_function(K, d, layout.with_noise, float(margin), layout.lyapunov,
+                         layout.formulation)
     out = [np.asarray(v) for v in f(np.asarray(theta, dtype=float))]
     L = np.stack(out[1 + K: 1 + 2 * K])
     res = {"priors": np.exp(out[0].ravel()), "mu": np.stack([v.ravel() for v in out[1: 1 + K]]),
-           "Sx": L @ np.transpose(L, (0, 2, 1)), "A": np.stack(out[1 + 2 * K: 1 + 3 * K])}
+           "Sx": L @ np.transpose(L, (0, 2, 1)), "A": np.stack(out[1 + 2 * K: 1 + 3 * K]),
+           "P": 0.5 * (out[1 + 3 * K] + out[1 + 3 * K].T)}
     if layout.with_noise:
-        LQ = np.stack(out[1 + 3 * K:])
+        LQ = np.stack(out[2 + 3 * K:])
         res["Q"] = LQ @ np.transpose(LQ, (0, 2, 1))
     return res

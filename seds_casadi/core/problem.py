@@ -16,6 +16,7 @@ import numpy as np
 from ._random import sklearn_random_state
 from .demonstrations import Demonstrations
 from .gmm import responsibilities
+from .lyapunov import LYAPUNOV_DIAG_RANGE, estimate_lyapunov
 from .objectives import SumKernels
 from .parametrization import Layout, unpack_numpy
 
@@ -94,6 +95,11 @@ class SEDSProblem:
         h = responsibilities(self.X, p["priors"], p["mu"], p["Sx"])
         return _speed_factor(p["A"], h, self.X, self.Xd)
 
+    def lyapunov_matrix(self, theta: np.ndarray) -> np.ndarray:
+        """P of V(x) = (x - x*)^T P (x - x*) for a given theta (the identity unless learned);
+        the same in the caller's coordinates (a scalar scaling changes V only by a factor)."""
+        return unpack_numpy(np.asarray(theta, dtype=float), self.layout, self.margin)["P"]
+
     def to_model_arrays(self, theta: np.ndarray, speed_factor: float | None = None
                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Priors, means and joint covariances in the caller's coordinates for a given theta.
@@ -101,7 +107,9 @@ class SEDSProblem:
         Sigma_xdot = A Sigma_x A^T + Q with Q the optimised noise (likelihood) or the
         responsibility-weighted residual covariance of the data (other objectives). For the
         direction objective the A_k are scaled by :meth:`speed_factor` first (pass it as
-        ``speed_factor`` if already computed).
+        ``speed_factor`` if already computed). In the constrained form, the priors are
+        normalised and mu_xdot^k = A_k (mu_x^k - x*) is imposed exactly (Eq. 10 e and a hold
+        there only to IPOPT's tolerance; ``fit_info["constraint_violation"]`` reports it).
         """
         p = unpack_numpy(np.asarray(theta, dtype=float), self.layout, self.margin)
         K, d = self.layout.K, self.layout.d
@@ -146,24 +154,31 @@ def _speed_factor(A, h, X, Xd) -> float:
 
 
 def _initial_theta(
-    layout: Layout, X: np.ndarray, Xd: np.ndarray, margin: float, random_state
+    layout: Layout, X: np.ndarray, Xd: np.ndarray, margin: float, random_state,
+    P0: np.ndarray | None = None,
 ) -> np.ndarray:
     """k-means + EM on the joint (x, xdot) data, then projected onto the stable set.
 
-    The GMR gain A_k = Sigma_xdotx Sigma_x^-1 of each EM component is split into symmetric and
-    skew parts; the symmetric part's eigenvalues are clipped to at most -max(5 % of its largest
-    magnitude, 2 m), which gives the nearest stable A_k in that sense.
+    The GMR gain A_k = Sigma_xdotx Sigma_x^-1 of each EM component gives S_k = P0 A_k (P0 = I
+    unless a Lyapunov matrix is learned), which is split into symmetric and skew parts; the
+    symmetric part's eigenvalues are clipped to at most -max(5 % of its largest magnitude, 2 m),
+    which gives the nearest stable S_k in that sense, and A_k = P0^-1 S_k.
     """
     from sklearn.mixture import GaussianMixture
 
     K, d = layout.K, layout.d
+    P0 = np.eye(d) if P0 is None else np.asarray(P0, dtype=float)
     gm = GaussianMixture(
         n_components=K, covariance_type="full", init_params="kmeans", reg_covar=1e-6,
         random_state=sklearn_random_state(random_state), max_iter=200,
     ).fit(np.hstack([X, Xd]))
     theta = np.zeros(layout.size)
-    logits = np.log(np.maximum(gm.weights_, 1e-12))
-    theta[: layout.n_logits] = logits[:-1] - logits[-1]
+    constrained = layout.formulation == "constrained"
+    if not constrained:
+        logits = np.log(np.maximum(gm.weights_, 1e-12))
+        theta[: layout.n_logits] = logits[:-1] - logits[-1]
+    if layout.lyapunov == "learned":
+        theta[layout.lyapunov_slice] = layout.pack_tril(np.linalg.cholesky(P0))
     for k in range(K):
         s = layout.slices(k)
         mu = gm.means_[k, :d]
@@ -172,17 +187,23 @@ def _initial_theta(
         theta[s["mu"]] = mu
         theta[s["L"]] = layout.pack_tril(np.linalg.cholesky(Sx))
         A = np.linalg.solve(Sx, S[:d, d:]).T  # Sigma_xdotx Sigma_x^-1
-        sym = 0.5 * (A + A.T)
+        PA = P0 @ A
+        sym = 0.5 * (PA + PA.T)
         ev, V = np.linalg.eigh(sym)
         cap = -max(0.05 * np.max(np.abs(ev)), 2.0 * margin, 1e-3)
         ev = np.minimum(ev, cap)
-        P = V @ np.diag(-ev - margin) @ V.T  # = B B^T
-        theta[s["B"]] = layout.pack_tril(np.linalg.cholesky(0.5 * (P + P.T)))
-        skew = 0.5 * (A - A.T)
-        theta[s["W"]] = [skew[i, j] for i, j in layout.strict]
+        skew = 0.5 * (PA - PA.T)
+        A_stable = np.linalg.solve(P0, V @ np.diag(ev) @ V.T + skew)
+        if constrained:
+            theta[s["pi"]] = max(gm.weights_[k], 1e-6)
+            theta[s["mud"]] = A_stable @ mu
+            theta[s["A"]] = A_stable.ravel()
+        else:
+            BB = V @ np.diag(-ev - margin) @ V.T  # = B B^T
+            theta[s["B"]] = layout.pack_tril(np.linalg.cholesky(0.5 * (BB + BB.T)))
+            theta[s["W"]] = [skew[i, j] for i, j in layout.strict]
         if layout.with_noise:
-            As = V @ np.diag(ev) @ V.T + skew
-            r = Xd - X @ As.T
+            r = Xd - X @ A_stable.T
             wk = gm.predict_proba(np.hstack([X, Xd]))[:, k]
             Q = (r * (wk / max(wk.sum(), 1e-300))[:, None]).T @ r + 1e-4 * np.eye(d)
             theta[s["Q"]] = layout.pack_tril(np.linalg.cholesky(Q))
@@ -192,10 +213,13 @@ def _initial_theta(
 def build_problem(demos: Demonstrations, n_components: int, objective: str,
                   omega_lower: float = 1.0, omega_upper: float = 2.0,
                   stability_margin: float = 1e-3, random_state=None,
-                  compile: bool = True, hessian: str = "auto") -> SEDSProblem:
+                  compile: bool = True, hessian: str = "auto", lyapunov: str = "identity",
+                  formulation: str = "by-construction") -> SEDSProblem:
     """Scale the data, initialise by k-means + EM and build the CasADi problem.
 
-    Parameters are those of :class:`~seds_casadi.core.seds.SEDS` (already validated).
+    Parameters are those of :class:`~seds_casadi.core.seds.SEDS` (already validated). With
+    ``lyapunov="learned"`` the initial P is :func:`~seds_casadi.core.lyapunov.estimate_lyapunov`
+    of the data.
     """
     if not isinstance(demos, Demonstrations):
         raise TypeError(
@@ -204,7 +228,8 @@ def build_problem(demos: Demonstrations, n_components: int, objective: str,
         )
     X, Xd, phase, _ = demos.stacked()
     d = X.shape[1]
-    layout = Layout(n_components, d, with_noise=objective == "likelihood")
+    layout = Layout(n_components, d, with_noise=objective == "likelihood", lyapunov=lyapunov,
+                    formulation=formulation)
     # each sample gives d velocity equations; ask for at least one per parameter
     if X.shape[0] * d < layout.size or X.shape[0] < 2 * n_components:
         raise ValueError(
@@ -222,7 +247,8 @@ def build_problem(demos: Demonstrations, n_components: int, objective: str,
         w = direction_weights(phase, omega_lower, omega_upper)
     else:
         w = np.ones(len(X))
-    theta0 = _initial_theta(layout, Xs, Xds, stability_margin, random_state)
+    P0 = estimate_lyapunov(Xs, Xds) if lyapunov == "learned" else None
+    theta0 = _initial_theta(layout, Xs, Xds, stability_margin, random_state, P0)
     lbx, ubx = _bounds(layout)
     theta0 = np.clip(theta0, lbx + 1e-9, ubx - 1e-9)
     if objective == "direction":  # Eq. 9: w_i cos = (w_i / |xdot_i|) xdot_i . f / |f|
@@ -310,15 +336,24 @@ def check_approach(demos: Demonstrations, X: np.ndarray, Xd: np.ndarray) -> None
 
 def _bounds(layout: Layout) -> tuple[np.ndarray, np.ndarray]:
     """Simple bounds on theta: means within +-50 (scaled units), exp-parametrised diagonals of
-    the Cholesky factors within [1e-3, 1e2]."""
+    the Cholesky factors within [1e-3, 1e2]; raw priors (constrained form) within [1e-8, 1]
+    (Eq. 10d); L_P's log-diagonal within :data:`~seds_casadi.core.lyapunov.LYAPUNOV_DIAG_RANGE`
+    and its off-diagonal within +-10, which bounds P's condition number."""
     lbx = np.full(layout.size, -np.inf)
     ubx = np.full(layout.size, np.inf)
     diag_pos = [i for i, (a, b) in enumerate(layout.tril) if a == b]
     for k in range(layout.K):
         s = layout.slices(k)
         lbx[s["mu"]], ubx[s["mu"]] = -50.0, 50.0
+        if "pi" in s:
+            lbx[s["pi"]], ubx[s["pi"]] = 1e-8, 1.0
         for name in ("L", "B", "Q"):
             if name in s:
                 idx = np.arange(s[name].start, s[name].stop)[diag_pos]
                 lbx[idx], ubx[idx] = np.log(1e-3), np.log(1e2)
+    if layout.n_lyapunov:
+        sl = layout.lyapunov_slice
+        lbx[sl], ubx[sl] = -10.0, 10.0
+        idx = np.arange(sl.start, sl.stop)[diag_pos]
+        lbx[idx], ubx[idx] = np.log(LYAPUNOV_DIAG_RANGE[0]), np.log(LYAPUNOV_DIAG_RANGE[1])
     return lbx, ubx

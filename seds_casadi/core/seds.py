@@ -24,9 +24,10 @@ from .demonstrations import Demonstrations
 from .errors import ConvergenceWarning, SolverError
 from .model_selection import bic_n_components
 from .objectives import approach_constraints
-from .parametrization import OBJECTIVES
+from .parametrization import FORMULATIONS, LYAPUNOV, OBJECTIVES, stability_constraints
 from .problem import HESSIANS, SEDSProblem, build_problem, direction_weights
 from .stable_ds import StableDS
+from .user_constraints import UserConstraints
 
 __all__ = ["SEDS", "SEDSProblem", "direction_weights"]
 
@@ -128,6 +129,30 @@ class SEDS(RegressorMixin, BaseEstimator):
         with motion across it at least ``approach_ratio`` times faster (an extension of the paper
         for hitting motions; see :func:`seds_casadi.core.objectives.approach_constraints`).
     approach_ratio : float, default 4.0
+    lyapunov : {"identity", "learned"}, default "identity"
+        The Lyapunov function that certifies the model. ``"identity"``: SEDS's
+        V(x) = |x - x*|^2 (A_k + A_k^T < 0). ``"learned"``: V(x) = (x - x*)^T P (x - x*) with a
+        symmetric positive definite P optimised jointly with the GMM (A_k^T P + P A_k < 0, the
+        condition of LPV-DS), which lets the model follow motions that first move away from the
+        target; starts from :func:`~seds_casadi.core.lyapunov.estimate_lyapunov`. The fitted
+        model exposes P as ``model_.lyapunov_matrix``.
+    formulation : {"by-construction", "constrained"}, default "by-construction"
+        How Eq. 10 is imposed: by the parametrization (every IPOPT iterate is a stable model), or
+        as the paper and the original SEDS code state it, constraints of the NLP (free A_k,
+        leading principal minors, mu_xdot and prior-sum equalities) handled by IPOPT's
+        interior-point method (:func:`~seds_casadi.core.parametrization.stability_constraints`).
+        Both are certified after the solve.
+    constraints : callable, optional
+        Extra constraints of the user's own: ``constraints(model) -> [(g, lower, upper), ...]``
+        where ``model`` is a dict of CasADi SX expressions in the caller's units:
+        ``"priors"`` (K, 1), ``"mu_x"``, ``"A"`` and ``"Sigma_x"`` (lists over components of
+        (d, 1), (d, d), (d, d)), ``"P"`` (d, d) and ``"target"`` (numpy). Each ``g`` is a scalar
+        or column expression with numeric bounds (use ``-inf``/``inf`` for one-sided ones).
+        They are constraints of the NLP, and the returned model is checked against them
+        (``fit_info["user_constraint_violation"]``; a violation beyond 1e-6 raises
+        :class:`SolverError`). With the direction objective the gains are rescaled after the
+        solve (``fit_info["speed_factor"]``), so constraints on the scale of ``A`` need
+        ``objective="mse"`` or ``"likelihood"``.
     verbose : bool, default False
         Print IPOPT's iteration log.
     """
@@ -148,6 +173,9 @@ class SEDS(RegressorMixin, BaseEstimator):
         compile: bool = True,
         approach_direction=None,
         approach_ratio: float = 4.0,
+        lyapunov: str = "identity",
+        formulation: str = "by-construction",
+        constraints=None,
         verbose: bool = False,
     ) -> None:
         # scikit-learn convention: store the parameters as given; fit() validates them
@@ -165,6 +193,9 @@ class SEDS(RegressorMixin, BaseEstimator):
         self.compile = compile
         self.approach_direction = approach_direction
         self.approach_ratio = approach_ratio
+        self.lyapunov = lyapunov
+        self.formulation = formulation
+        self.constraints = constraints
         self.verbose = verbose
 
     def _validated(self) -> dict:
@@ -178,6 +209,14 @@ class SEDS(RegressorMixin, BaseEstimator):
             raise ValueError(f"n_components must be at least 1, got {K}")
         if self.objective not in OBJECTIVES:
             raise ValueError(f"unknown objective {self.objective!r}; valid: {', '.join(OBJECTIVES)}")
+        if self.lyapunov not in LYAPUNOV:
+            raise ValueError(f"unknown lyapunov {self.lyapunov!r}; valid: {', '.join(LYAPUNOV)}")
+        if self.formulation not in FORMULATIONS:
+            raise ValueError(f"unknown formulation {self.formulation!r}; valid: "
+                             f"{', '.join(FORMULATIONS)}")
+        if self.constraints is not None and not callable(self.constraints):
+            raise TypeError("constraints must be a callable model -> [(g, lower, upper), ...], "
+                            f"got {type(self.constraints).__name__}")
         if self.hessian not in HESSIANS:
             raise ValueError(f"unknown hessian {self.hessian!r}; valid: {', '.join(HESSIANS)}")
         for name in ("omega_lower", "omega_upper"):
@@ -218,7 +257,7 @@ class SEDS(RegressorMixin, BaseEstimator):
             K = bic_n_components(Xs, Xd, random_state=self.random_state)[0]
         return build_problem(demos, K, self.objective, self.omega_lower,
                              self.omega_upper, self.stability_margin, self.random_state,
-                             self.compile, self.hessian)
+                             self.compile, self.hessian, self.lyapunov, self.formulation)
 
     def fit(self, X, y=None, target=None) -> SEDS:
         """Learn a certified globally stable DS from demonstrations.
@@ -288,7 +327,7 @@ class SEDS(RegressorMixin, BaseEstimator):
         return model
 
     def _ipopt_options(self, params: dict, hessian: str) -> dict:
-        return {
+        opts = {
             "print_time": False,
             "ipopt.print_level": 5 if self.verbose else 0,
             "ipopt.sb": "yes",
@@ -302,19 +341,40 @@ class SEDS(RegressorMixin, BaseEstimator):
             "ipopt.acceptable_iter": 5,
             "ipopt.hessian_approximation": hessian,
         }
+        if self.formulation == "constrained":
+            # Eq. 10 as constraints: IPOPT's iterates satisfy them only at convergence, so an
+            # early "acceptable" stop must be feasible to the certificate's precision
+            opts["ipopt.constr_viol_tol"] = 1e-9
+            opts["ipopt.acceptable_constr_viol_tol"] = 1e-9
+        return opts
 
-    def _constraints(self, prob: SEDSProblem, params: dict, theta_sym) -> tuple[list, dict]:
-        """The optional arrival constraint (g, bounds); none by default."""
+    def _constraints(self, prob: SEDSProblem, params: dict, theta_sym
+                     ) -> tuple[list, list, list, UserConstraints | None]:
+        """Constraints of the NLP: the optional arrival constraint, Eq. 10 in the constrained
+        form, the user's own; as (expressions, lbg, ubg, user)."""
+        g, lb, ub = [], [], []
         u = params["approach_direction"]
-        if u is None:
-            return [], {}
         d = prob.layout.d
-        if u.shape != (d,):
-            raise ValueError(f"approach_direction has {u.shape[0]} entries for {d}-D "
-                             "demonstrations")
-        g = approach_constraints(prob.layout, prob.margin, u, self.approach_ratio)
-        return [g(theta_sym)], {"lbg": np.zeros(2 * (d - 1)),
-                                "ubg": np.r_[np.zeros(d - 1), np.full(d - 1, np.inf)]}
+        if u is not None:
+            if u.shape != (d,):
+                raise ValueError(f"approach_direction has {u.shape[0]} entries for {d}-D "
+                                 "demonstrations")
+            fa = approach_constraints(prob.layout, prob.margin, u, self.approach_ratio)
+            g.append(fa(theta_sym))
+            lb.append(np.zeros(2 * (d - 1)))
+            ub.append(np.r_[np.zeros(d - 1), np.full(d - 1, np.inf)])
+        if prob.layout.formulation == "constrained":
+            fs, lbs, ubs = stability_constraints(prob.layout, prob.margin)
+            g.append(fs(theta_sym))
+            lb.append(lbs)
+            ub.append(ubs)
+        user = None
+        if self.constraints is not None:
+            user = UserConstraints(self.constraints, prob)
+            g.append(user.of_theta(theta_sym))
+            lb.append(user.lower)
+            ub.append(user.upper)
+        return g, lb, ub, user
 
     def _solve(self, demos: Demonstrations, params: dict) -> StableDS:
         t0 = time.perf_counter()
@@ -322,10 +382,13 @@ class SEDS(RegressorMixin, BaseEstimator):
         theta_sym = ca.MX.sym("theta", prob.layout.size)
         objective = prob.kernels.nlp_objective()  # keep alive while the solver runs
         nlp = {"x": theta_sym, "f": objective(theta_sym)}
-        g, bounds = self._constraints(prob, params, theta_sym)
+        g, lbg, ubg, user = self._constraints(prob, params, theta_sym)
+        bounds = {}
         if g:
             nlp["g"] = ca.vertcat(*g)
+            bounds = {"lbg": np.concatenate(lbg), "ubg": np.concatenate(ubg)}
         label = (f"SEDS fit ({self.objective}, K={prob.layout.K}, d={prob.layout.d}, "
+                 f"{prob.layout.formulation}, P {prob.layout.lyapunov}, "
                  f"{prob.X.shape[0]} samples, {prob.layout.size} parameters, "
                  f"{prob.hessian} Hessian)")
         _LOG.info("%s: solving with IPOPT (problem built in %.1f s)", label,
@@ -359,8 +422,15 @@ class SEDS(RegressorMixin, BaseEstimator):
                 "the solution has a numerically singular covariance (a component collapsed "
                 f"onto a subspace of the {prob.layout.d}-D data); use fewer components, more or "
                 "less redundant data, or hessian='exact'", status) from None
+        lyap = prob.lyapunov_matrix(theta) if prob.layout.lyapunov == "learned" else None
+        viol = 0.0
+        if g:
+            gv = np.asarray(ca.Function("g", [theta_sym], [nlp["g"]])(theta)).ravel()
+            viol = float(np.max(np.r_[0.0, bounds["lbg"] - gv, gv - bounds["ubg"]]))
         info = {
             "status": status, "success": converged,
+            "lyapunov": prob.layout.lyapunov, "formulation": prob.layout.formulation,
+            "constraint_violation": viol,
             "iterations": int(stats.get("iter_count", -1)), "objective": J,
             "objective_initial": prob.kernels.value(prob.theta0),
             "objective_name": self.objective, "seconds": time.perf_counter() - t0,
@@ -369,7 +439,11 @@ class SEDS(RegressorMixin, BaseEstimator):
             "n_samples": int(prob.X.shape[0]), "hessian": prob.hessian,
             "compiled_kernels": prob.kernels.compiled, "solver": "ipopt",
         }
-        return StableDS(priors, means, covs, prob.target, fit_info=info, status=status)
+        model = StableDS(priors, means, covs, prob.target, fit_info=info, status=status,
+                         lyapunov=lyap)
+        if user is not None:
+            model.fit_info["user_constraint_violation"] = user.check(model, status)
+        return model
 
 
 def _as_demonstrations(X, y, target) -> Demonstrations:

@@ -13,6 +13,10 @@ Saved-model format (``.npz``, read with ``allow_pickle=False``)
 ``covariances`` (K, 2d, 2d), ``target`` (d,), ``fit_info`` (a JSON string) and ``checksum``: the
 SHA-256 of the float64 little-endian bytes of priors, means, covariances and target followed by the
 UTF-8 bytes of fit_info. ``load`` checks all of it and re-certifies stability.
+
+A model with a learned Lyapunov matrix (issue 14) is written as ``version`` = 2 with the extra
+entry ``lyapunov`` (d, d) after ``target`` (and in the checksum); it is certified against
+A_k^T P + P A_k < 0 on load, so a tampered P is refused. Version 1 files load with P = I.
 """
 
 from __future__ import annotations
@@ -32,7 +36,9 @@ __all__ = ["StableDS", "certify"]
 
 FORMAT = "seds_casadi.StableDS"
 VERSION = 1
+VERSION_LYAPUNOV = 2
 _SCHEMA = {"priors": 1, "means": 2, "covariances": 3, "target": 1}
+_SCHEMA_LYAPUNOV = {**_SCHEMA, "lyapunov": 2}
 
 
 def certify(
@@ -42,8 +48,13 @@ def certify(
     target: np.ndarray,
     status: str = "unknown",
     rtol: float = 1e-8,
+    lyapunov: np.ndarray | None = None,
 ) -> dict[str, float]:
     """Check the stability conditions of Eq. 10 numerically; raise if one fails.
+
+    Condition (b) is checked in its generalised form A_k^T P + P A_k < 0 when a Lyapunov
+    matrix P is given (then V(x) = (x - x*)^T P (x - x*) decreases along every trajectory), and
+    as A_k + A_k^T < 0 (P = I, SEDS's V) otherwise.
 
     Parameters
     ----------
@@ -55,11 +66,15 @@ def certify(
         Solver status to carry in the exception.
     rtol : float
         Relative tolerance for the equalities (e) and (a).
+    lyapunov : array, shape (d, d), optional
+        P, symmetric positive definite (checked).
 
     Returns
     -------
     dict
-        The margins: ``max_eig_sym_A`` (largest eigenvalue of any A_k + A_k^T, must be < 0),
+        The margins: ``max_eig_lyapunov`` (largest eigenvalue of any A_k^T P + P A_k, must be
+        < 0), ``max_eig_sym_A`` (the same for P = I; may be >= 0 with a learned P),
+        ``lyapunov_condition`` (cond(P)),
         ``min_eig_cov`` (smallest eigenvalue of any joint covariance, > 0), ``prior_sum_error``
         and ``f_target_norm`` (||f(x*)||, relative to the velocity scale of the means).
 
@@ -92,18 +107,20 @@ def certify(
                 f"joint covariance {k} is not positive definite (smallest eigenvalue {ev[0]:.3g})",
                 "(c) Sigma_k > 0", status)
     # (b)
-    max_eig = -np.inf
+    P = _check_lyapunov(lyapunov, d, status)
+    max_eig = max_sym = -np.inf
     f_err = 0.0
     for k in range(K):
         Sx = covariances[k][:d, :d]
         Sdx = covariances[k][d:, :d]
         A = np.linalg.solve(Sx.T, Sdx.T).T
-        ev = np.linalg.eigvalsh(A + A.T)
+        max_sym = max(max_sym, float(np.linalg.eigvalsh(A + A.T)[-1]))
+        ev = np.linalg.eigvalsh(A.T @ P + P @ A)
         max_eig = max(max_eig, float(ev[-1]))
         if ev[-1] >= 0:
+            cond = "(b) A_k + A_k^T < 0" if lyapunov is None else "(b) A_k^T P + P A_k < 0"
             raise StabilityError(
-                f"component {k}: A_k + A_k^T has eigenvalue {ev[-1]:.3g} >= 0",
-                "(b) A_k + A_k^T < 0", status)
+                f"component {k}: {cond[4:-4]} has eigenvalue {ev[-1]:.3g} >= 0", cond, status)
         # (a): mu_xdot + A (x* - mu_x) = 0
         resid = means[k, d:] + A @ (target - means[k, :d])
         scale = max(np.linalg.norm(means[k, d:]), np.linalg.norm(A) * np.linalg.norm(
@@ -113,8 +130,27 @@ def certify(
             raise StabilityError(
                 f"component {k}: its linear model does not vanish at the target "
                 f"(residual {np.linalg.norm(resid):.3g})", "(a) f(x*) = 0", status)
-    return {"max_eig_sym_A": max_eig, "min_eig_cov": min_eig, "prior_sum_error": psum,
-            "f_target_norm": f_err}
+    return {"max_eig_lyapunov": max_eig, "max_eig_sym_A": max_sym,
+            "lyapunov_condition": float(np.linalg.cond(P)), "min_eig_cov": min_eig,
+            "prior_sum_error": psum, "f_target_norm": f_err}
+
+
+def _check_lyapunov(P, d: int, status: str) -> np.ndarray:
+    """P as a checked (d, d) symmetric positive definite array (the identity for None)."""
+    if P is None:
+        return np.eye(d)
+    P = np.asarray(P, dtype=float)
+    if P.shape != (d, d):
+        raise StabilityError(f"the Lyapunov matrix has shape {P.shape}, not ({d}, {d})",
+                             "P > 0", status)
+    if not np.all(np.isfinite(P)) or np.max(np.abs(P - P.T)) > 1e-9 * max(1.0, np.abs(P).max()):
+        raise StabilityError("the Lyapunov matrix is not a finite symmetric matrix", "P > 0",
+                             status)
+    ev = np.linalg.eigvalsh(P)
+    if ev[0] <= 1e-12 * ev[-1]:
+        raise StabilityError(f"the Lyapunov matrix is not positive definite (eigenvalues "
+                             f"{ev[0]:.3g} .. {ev[-1]:.3g})", "P > 0", status)
+    return P
 
 
 class StableDS(CachedFunctionMixin):
@@ -133,6 +169,9 @@ class StableDS(CachedFunctionMixin):
         Solver report (``status``, ``iterations``, ``objective``, ``seconds``, ...).
     status : str
         Status carried by a :class:`StabilityError` if the certificate fails.
+    lyapunov : array, shape (d, d), optional
+        The matrix P of V(x) = (x - x*)^T P (x - x*) that certifies the model (a learned one,
+        ``SEDS(lyapunov="learned")``); None for SEDS's P = I.
 
     Attributes
     ----------
@@ -142,7 +181,8 @@ class StableDS(CachedFunctionMixin):
         Margins returned by :func:`certify`.
     """
 
-    def __init__(self, priors, means, covariances, target, fit_info=None, status="constructed"):
+    def __init__(self, priors, means, covariances, target, fit_info=None, status="constructed",
+                 lyapunov=None):
         self.priors = np.array(priors, dtype=float).ravel()
         self.means = np.array(means, dtype=float)
         self.covariances = np.array(covariances, dtype=float)
@@ -154,12 +194,19 @@ class StableDS(CachedFunctionMixin):
                 f"covariances {self.covariances.shape}, target {self.target.shape}; expected "
                 f"({K},), ({K}, {2 * d}), ({K}, {2 * d}, {2 * d}), ({d},)"
             )
-        self.certificate = certify(self.priors, self.means, self.covariances, self.target, status)
+        self._lyapunov = None if lyapunov is None else np.array(lyapunov, dtype=float)
+        self.certificate = certify(self.priors, self.means, self.covariances, self.target, status,
+                                   lyapunov=self._lyapunov)
         self.A = np.stack([
             np.linalg.solve(self.covariances[k, :d, :d].T, self.covariances[k, d:, :d].T).T
             for k in range(K)
         ])
         self.fit_info = dict(fit_info or {})
+
+    @property
+    def lyapunov_matrix(self) -> np.ndarray:
+        """P of the certificate V(x) = (x - x*)^T P (x - x*): learned, or the identity (SEDS)."""
+        return np.eye(self.n_dims) if self._lyapunov is None else self._lyapunov.copy()
 
     @property
     def n_components(self) -> int:
@@ -298,10 +345,14 @@ class StableDS(CachedFunctionMixin):
     def save(self, path: str | os.PathLike) -> None:
         """Write the model to ``path`` (``.npz``, the guarded format of
         :mod:`seds_casadi.core.model_files`: checksum, no pickle), atomically."""
-        write_guarded(path, FORMAT, VERSION,
-                      {"priors": self.priors, "means": self.means,
-                       "covariances": self.covariances, "target": self.target},
-                      self.fit_info, meta_key="fit_info", json_default=_json_default)
+        arrays = {"priors": self.priors, "means": self.means,
+                  "covariances": self.covariances, "target": self.target}
+        version = VERSION
+        if self._lyapunov is not None:
+            arrays["lyapunov"] = self._lyapunov
+            version = VERSION_LYAPUNOV
+        write_guarded(path, FORMAT, version, arrays, self.fit_info, meta_key="fit_info",
+                      json_default=_json_default)
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> StableDS:
@@ -314,10 +365,14 @@ class StableDS(CachedFunctionMixin):
         StabilityError
             The stored parameters violate Eq. 10.
         """
-        arrays, info, _ = read_guarded(path, FORMAT, (VERSION,), _SCHEMA, meta_key="fit_info")
+        version = _peek_version(path)
+        schema = _SCHEMA_LYAPUNOV if version == VERSION_LYAPUNOV else _SCHEMA
+        arrays, info, _ = read_guarded(path, FORMAT, (VERSION, VERSION_LYAPUNOV), schema,
+                                       meta_key="fit_info")
         try:
             return cls(arrays["priors"], arrays["means"], arrays["covariances"],
-                       arrays["target"], fit_info=info, status="loaded")
+                       arrays["target"], fit_info=info, status="loaded",
+                       lyapunov=arrays.get("lyapunov"))
         except StabilityError:
             raise
         except (ValueError, np.linalg.LinAlgError) as exc:
@@ -326,6 +381,17 @@ class StableDS(CachedFunctionMixin):
     def __repr__(self) -> str:
         st = self.fit_info.get("status", "-")
         return f"StableDS(n_components={self.n_components}, n_dims={self.n_dims}, status={st!r})"
+
+
+def _peek_version(path) -> int | None:
+    """The file's ``version`` entry if it can be read (read_guarded reports every other fault)."""
+    try:
+        with np.load(os.fspath(path), allow_pickle=False) as f:
+            return int(f["version"]) if "version" in f.files else None
+    except FileNotFoundError:
+        raise
+    except Exception:  # noqa: BLE001 - read_guarded says what is wrong with the file
+        return None
 
 
 def _json_default(o):
