@@ -118,8 +118,13 @@ def test_bic_picks_the_number_of_clusters_of_a_known_mixture():
     rng = np.random.default_rng(0)
     centres = np.array([[0, 0, 0, 0], [6, 0, -3, 1], [0, 6, 2, -2]], float)
     Z = np.concatenate([c + 0.5 * rng.standard_normal((150, 4)) for c in centres])
-    K, bic = bic_n_components(Z[:, :2], Z[:, 2:], max_components=6, random_state=0)
+    K, bic = bic_n_components(Z[:, :2], Z[:, 2:], max_components=6, random_state=0,
+                              rule="min")
     assert K == 3 and len(bic) == 6 and np.argmin(bic) == 2
+    K_elbow, bic_e = bic_n_components(Z[:, :2], Z[:, 2:], max_components=6, random_state=0)
+    assert K_elbow == 3  # the default: ds-opt's elbow of the same curve
+    with pytest.raises(ValueError, match="BIC rule"):
+        bic_n_components(Z[:, :2], Z[:, 2:], rule="aic")
     with pytest.raises(ValueError, match="same shape"):
         bic_n_components(Z[:, :2], Z[:10, 2:])
 
@@ -128,6 +133,8 @@ def test_seds_with_bic_components_records_the_scores(spiral_demos):
     learner = SEDS("bic", objective="mse", random_state=0).fit(spiral_demos)
     info = learner.model_.fit_info
     assert learner.n_components == "bic"  # the parameter is left as given
-    assert info["n_components"] == learner.model_.n_components == int(np.argmin(info["bic"])) + 1
+    from seds_casadi.core.model_selection import dsopt_elbow_k
+
+    assert info["n_components"] == learner.model_.n_components == dsopt_elbow_k(info["bic"])
     with pytest.raises(TypeError, match="integer or 'bic'"):
         SEDS("aic").fit(spiral_demos)

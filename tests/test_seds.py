@@ -358,3 +358,29 @@ def test_a_many_component_fit_with_thin_components_is_certified():
         assert np.linalg.eigvalsh(model.covariances[k]).min() > 0               # (c)
     assert np.all(model.priors > 0) and np.sum(model.priors) == pytest.approx(1.0, abs=1e-12)
     np.testing.assert_allclose(model.predict(model.target), 0.0, atol=1e-9)     # f(x*) = 0
+
+
+@pytest.mark.parametrize("shape", ["CShape", "Sshape"])
+def test_direction_objective_moves_at_the_demonstrated_speeds(shape):
+    """Issue 13: Eq. 9 fixes only directions; the returned model is calibrated so that its speed
+    along the demonstrations is the demonstrated one at the median sample (the least-squares
+    factor gave 0.02x on CShape), and its reproductions reach the target."""
+    from seds_casadi.core import load_lasa
+
+    demos = load_lasa(shape, n_samples=100)
+    ratios = {}
+    for how in ("median", "least-squares"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            m = SEDS(5, random_state=0, speed_calibration=how).fit(demos).model_
+        X, V = np.concatenate(demos.positions), np.concatenate(demos.velocities)
+        nf, nv = np.linalg.norm(m.predict(X), axis=1), np.linalg.norm(V, axis=1)
+        ok = nv > 0
+        ratios[how] = float(np.median(nf[ok] / nv[ok]))
+        if how == "median":
+            _, info = m.rollout(np.stack([p[0] for p in demos.positions]), dt=0.02,
+                                max_steps=3000, tol=0.01 * np.ptp(X, axis=0).max(),
+                                return_info=True, warn=False)
+            assert info["converged"].all()
+    assert 0.8 <= ratios["median"] <= 1.25
+    assert ratios["least-squares"] < 0.8  # the former calibration, for contrast

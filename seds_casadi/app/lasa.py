@@ -63,6 +63,12 @@ from ..core.metrics import (
     reproduction_dtw,
     velocity_rmse,
 )
+from ..core.model_selection import (  # noqa: F401 - re-exported
+    BIC_RULES,
+    bic_scores,
+    choose_k_by_bic,
+    dsopt_elbow_k,
+)
 from ..core.parametrization import OBJECTIVES
 from ..core.seds import SEDS
 
@@ -87,8 +93,6 @@ DSOPT_TRAIN_DEMOS = (1, 2, 3, 4)
 DSOPT_TEST_DEMOS = (5, 6, 7)
 DSOPT_SAMPLE_STEP = 2
 DSOPT_START_INDEX = 19
-#: how K is chosen from the BIC curve (see :func:`choose_k_by_bic`)
-BIC_RULES = ("ds-opt", "min")
 
 #: Published means over the 26 shapes, (method, set) -> (RMSE [mm/s], e_dot, DTWD [mm]).
 #: SEDS: ``results/seds_stats_all.mat`` of nbfigueroa/ds-opt (means over shapes of the means over
@@ -247,132 +251,6 @@ def _check_dsopt_shapes(shapes) -> None:
                      "are not among them)" if s in LASA_SHAPES else "")
             raise ValueError(f"unknown shape {s!r} for the ds-opt protocol{extra}; valid: "
                              f"{', '.join(LASA_SINGLE_SHAPES)}")
-
-
-def bic_scores(X: np.ndarray, Xdot: np.ndarray, k_max: int = 15, random_state=0,
-               n_init: int = 10) -> np.ndarray:
-    """BIC of full-covariance GMMs with K = 1..k_max fitted to the joint data [x, xdot].
-
-    As ds-opt's search (phys-gmm ``fit_gmm_bic.m``: ``fitgmdist(..., 'Start', 'plus',
-    'CovarianceType', 'full', 'Regularize', 1e-6, 'Replicates', 10)`` for each K), with
-    scikit-learn's :class:`~sklearn.mixture.GaussianMixture` (k-means++ start, ``reg_covar``
-    1e-6, ``n_init`` replicates) and its ``bic`` (which counts K - 1 + K D + K D (D + 1) / 2
-    parameters; phys-gmm's ``GMM_BIC.m`` counts K D (D - 1) / 2 for the covariances, a term
-    linear in K that no second difference sees).
-
-    Parameters
-    ----------
-    X, Xdot : array, shape (n, d)
-        Positions and velocities.
-    k_max : int, default 15
-    random_state : int, numpy Generator or None
-    n_init : int, default 10
-        EM runs per K (the best is kept).
-
-    Returns
-    -------
-    array, shape (k_max,)
-        BIC for K = 1, ..., k_max (lower is better).
-    """
-    from sklearn.exceptions import ConvergenceWarning as SklearnConvergenceWarning
-    from sklearn.mixture import GaussianMixture
-    from threadpoolctl import threadpool_limits
-
-    from ..core._random import sklearn_random_state
-
-    Z = np.hstack([np.asarray(X, dtype=float), np.asarray(Xdot, dtype=float)])
-    if Z.ndim != 2 or len(X) != len(Xdot) or not np.all(np.isfinite(Z)):
-        raise ValueError("X and Xdot must be finite arrays of the same shape (n, d)")
-    k_max, n_init = int(k_max), int(n_init)
-    if k_max < 1 or n_init < 1:
-        raise ValueError(f"k_max and n_init must be at least 1, got {k_max} and {n_init}")
-    if k_max > len(Z):
-        raise ValueError(f"k_max = {k_max} exceeds the {len(Z)} samples")
-    seed = sklearn_random_state(random_state)
-    out = np.empty(k_max)
-    # one BLAS thread: on small data the threads only contend (10x slower measured on 2 cores)
-    with threadpool_limits(limits=1), warnings.catch_warnings():
-        warnings.simplefilter("ignore", SklearnConvergenceWarning)
-        for k in range(1, k_max + 1):
-            g = GaussianMixture(k, covariance_type="full", reg_covar=1e-6, n_init=n_init,
-                                init_params="k-means++", random_state=seed).fit(Z)
-            out[k - 1] = g.bic(Z)
-    return out
-
-
-def _peaks(x: np.ndarray) -> np.ndarray:
-    """Indices of strict interior local maxima (MATLAB's ``findpeaks`` without plateaus)."""
-    i = np.arange(1, len(x) - 1)
-    return i[(x[i] > x[i - 1]) & (x[i] > x[i + 1])]
-
-
-def dsopt_elbow_k(bic: np.ndarray) -> int:
-    """K at the elbow of a BIC curve, by the rule of phys-gmm's ``fit_gmm_bic.m`` (June 2018).
-
-    With d2 = [0, diff([0, diff(bic)])] (MATLAB's construction), K is the argmax of d2: where the
-    BIC stops falling fast. If that maximum is the curve's first interior peak and not the last
-    K, the second peak of d2 is taken instead when it is within 75 % of the highest (or, if no
-    other is, within 45 %). This is the rule of phys-gmm commit e731dcd (3 June 2018), the
-    version in use when ``seds_stats_all.mat`` was written (14 June 2018); phys-gmm later (26 June)
-    switched to a distance-to-line elbow.
-
-    Parameters
-    ----------
-    bic : array, shape (k_max,)
-        BIC for K = 1..k_max.
-
-    Returns
-    -------
-    int
-        The chosen K (1-based).
-    """
-    b = np.asarray(bic, dtype=float).ravel()
-    if len(b) == 0 or not np.all(np.isfinite(b)):
-        raise ValueError("bic must be a non-empty finite array")
-    d1 = np.r_[0.0, np.diff(b)]
-    d2 = np.r_[0.0, np.diff(d1)]
-    k = int(np.argmax(d2))
-    pk = _peaks(d2)
-    if k != len(b) - 1 and len(pk) and k == pk.min():
-        ratios = d2[pk] / d2[pk].max()
-        poss = np.flatnonzero(ratios > 0.75)
-        if len(poss) == 1:
-            poss = np.flatnonzero(ratios > 0.45)
-            if len(poss) > 1:
-                k = int(pk[poss[1]])
-        else:
-            k = int(pk[poss[1]])
-    return k + 1
-
-
-def choose_k_by_bic(X: np.ndarray, Xdot: np.ndarray, k_max: int = 15, random_state=0,
-                    rule: str = "ds-opt", n_init: int = 10) -> int:
-    """The number of Gaussians by BIC on the joint data [x; xdot], as ds-opt chooses it for SEDS.
-
-    ds-opt's ``evaluate_SEDS.m`` calls ``discover_local_models([x; xdot], xdot, est_options)``
-    with ``type = 1`` (GMM-EM with BIC model selection) and ``maxK = 15``, which runs phys-gmm's
-    ``fit_gmm_bic``: BIC for K = 1..15 (:func:`bic_scores`), then K at the *elbow* of the curve
-    (:func:`dsopt_elbow_k`), not at its minimum. On LASA's 2,000 smooth training points the
-    minimum is at K = 13-15 for every shape (measured here), whereas the published runs used
-    K = 3-14 (median 5); ``rule="min"`` gives the textbook choice for comparison.
-
-    Parameters
-    ----------
-    X, Xdot : array, shape (n, d)
-    k_max : int, default 15
-    random_state : int, numpy Generator or None
-    rule : {"ds-opt", "min"}, default "ds-opt"
-    n_init : int, default 10
-        EM runs per K (ds-opt: 10 replicates).
-
-    Returns
-    -------
-    int
-    """
-    if rule not in BIC_RULES:
-        raise ValueError(f"unknown BIC rule {rule!r}; valid: {', '.join(BIC_RULES)}")
-    b = bic_scores(X, Xdot, k_max=k_max, random_state=random_state, n_init=n_init)
-    return dsopt_elbow_k(b) if rule == "ds-opt" else int(np.argmin(b)) + 1
 
 
 def _resolve_k(shape: str, n_components, train: DsOptSet, k_max: int, random_state,

@@ -82,23 +82,45 @@ class SEDSProblem:
     objective_function: ca.Function = field(repr=False)
     hessian: str = "exact"
 
-    def speed_factor(self, theta: np.ndarray) -> float:
-        """Least-squares speed calibration c* = sum_i f_i . xdot_i / sum_i ||f_i||^2 (> 0).
+    def speed_factor(self, theta: np.ndarray, how: str = "median") -> float:
+        """The factor c > 0 that gives a direction-objective model the demonstrated speeds.
 
-        The direction objective (Eq. 9) fixes f only up to a positive factor (scaling every A_k by
-        c > 0 changes neither the directions nor the stability). For the direction objective the
-        returned model is scaled by c*, the factor that best matches the demonstrated speeds, so
-        its reproductions and velocity errors are meaningful; h = f/||f|| (Eq. 8) is unchanged.
-        Returns 1 if the fit is so poor that c* would not be positive.
+        The direction objective (Eq. 9) fixes f only up to a positive factor (scaling every A_k
+        by c > 0 changes neither the directions, so neither h = f/||f|| of Eq. 8, nor the
+        stability). The returned model is scaled by c so that it moves at the demonstrated
+        speeds:
+
+        * ``"median"`` (default): c = median_i ||xdot_i|| / ||f_i||, over the samples that move:
+          the model's speed along the demonstrations is then the demonstrated one at the median
+          sample, whatever a few samples with a large ||f|| do;
+        * ``"least-squares"``: c = sum_i f_i . xdot_i / sum_i ||f_i||^2, dominated by the
+          samples where ||f|| is largest (on LASA CShape it gave 0.018x the demonstrated speed
+          at the median sample).
+
+        Returns 1 if no sample gives a positive factor.
         """
-        p = unpack_numpy(np.asarray(theta, dtype=float), self.layout, self.margin)
+        p = self._model_params(theta)
         h = responsibilities(self.X, p["priors"], p["mu"], p["Sx"])
-        return _speed_factor(p["A"], h, self.X, self.Xd)
+        return _speed_factor(p["A"], h, self.X, self.Xd, how)
+
+    def _model_params(self, theta: np.ndarray) -> dict[str, np.ndarray]:
+        """:func:`unpack_numpy` with a Sigma_x whose smallest eigenvalue is below
+        :data:`COVARIANCE_FLOOR` times its largest raised by that much: a component that
+        collapsed onto a subspace of the data (seen in 7-D joint space, eigenvalues 1e-17 to
+        1e3) keeps an invertible Sigma_x; other components are untouched. A_k is unchanged
+        (the model's Sigma_xdotx is built from the floored Sigma_x)."""
+        p = unpack_numpy(np.asarray(theta, dtype=float), self.layout, self.margin)
+        d = self.layout.d
+        for k in range(self.layout.K):
+            ev = np.linalg.eigvalsh(p["Sx"][k])
+            if ev[0] < COVARIANCE_FLOOR * ev[-1]:  # only a numerically singular Sigma_x
+                p["Sx"][k] = p["Sx"][k] + COVARIANCE_FLOOR * ev[-1] * np.eye(d)
+        return p
 
     def lyapunov_matrix(self, theta: np.ndarray) -> np.ndarray:
         """P of V(x) = (x - x*)^T P (x - x*) for a given theta (the identity unless learned);
         the same in the caller's coordinates (a scalar scaling changes V only by a factor)."""
-        return unpack_numpy(np.asarray(theta, dtype=float), self.layout, self.margin)["P"]
+        return self._model_params(theta)["P"]
 
     def to_model_arrays(self, theta: np.ndarray, speed_factor: float | None = None
                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -111,7 +133,7 @@ class SEDSProblem:
         normalised and mu_xdot^k = A_k (mu_x^k - x*) is imposed exactly (Eq. 10 e and a hold
         there only to IPOPT's tolerance; ``fit_info["constraint_violation"]`` reports it).
         """
-        p = unpack_numpy(np.asarray(theta, dtype=float), self.layout, self.margin)
+        p = self._model_params(theta)
         K, d = self.layout.K, self.layout.d
         sx, sv = self.position_scale, self.velocity_scale
         if "Q" in p:
@@ -147,10 +169,33 @@ class SEDSProblem:
         return p["priors"].copy(), means, covs
 
 
-def _speed_factor(A, h, X, Xd) -> float:
+SPEED_CALIBRATIONS = ("median", "least-squares")
+#: smallest eigenvalue ratio of a returned Sigma_x (see :meth:`SEDSProblem._model_params`)
+COVARIANCE_FLOOR = 1e-10
+#: variance added to the EM covariances of the initialisation (scaled units: positions and
+#: velocities of unit RMS), by dimension. In 4-D and above the components' samples rarely span
+#: every dimension (7-D joint-space putts: data variances 2e-5 .. 2), EM's components collapse
+#: and their regression matrices start IPOPT in a poor basin: WAM joint space, direction
+#: objective, K = 3: e_dot 0.66 with 1e-6, 0.06 with 1e-2 (K = 2, 5: 0.08 / 0.09 -> 0.07 / 0.06).
+#: 2-D and 3-D keep 1e-6, with which every measurement in benchmarks/README.md was made.
+INIT_REG_COVAR = {2: 1e-6, 3: 1e-6}
+INIT_REG_COVAR_HIGH_D = 1e-2
+
+
+def _speed_factor(A, h, X, Xd, how: str = "median") -> float:
     F = np.einsum("nk,kij,nj->ni", h, A, X)
-    num, den = float(np.sum(F * Xd)), float(np.sum(F * F))
-    return num / den if (num > 0 and den > 0) else 1.0
+    if how == "least-squares":
+        num, den = float(np.sum(F * Xd)), float(np.sum(F * F))
+        return num / den if (num > 0 and den > 0) else 1.0
+    if how != "median":
+        raise ValueError(f"unknown speed calibration {how!r}; valid: "
+                         f"{', '.join(SPEED_CALIBRATIONS)}")
+    nf, nv = np.linalg.norm(F, axis=1), np.linalg.norm(Xd, axis=1)
+    ok = (nf > 1e-12 * max(nf.max(), 1e-300)) & (nv > 1e-12 * max(nv.max(), 1e-300))
+    if not ok.any():
+        return 1.0
+    c = float(np.exp(np.median(np.log(nv[ok]) - np.log(nf[ok]))))
+    return c if np.isfinite(c) and c > 0 else 1.0
 
 
 def _initial_theta(
@@ -169,7 +214,8 @@ def _initial_theta(
     K, d = layout.K, layout.d
     P0 = np.eye(d) if P0 is None else np.asarray(P0, dtype=float)
     gm = GaussianMixture(
-        n_components=K, covariance_type="full", init_params="kmeans", reg_covar=1e-6,
+        n_components=K, covariance_type="full", init_params="kmeans",
+        reg_covar=INIT_REG_COVAR.get(d, 1e-6 if d < 2 else INIT_REG_COVAR_HIGH_D),
         random_state=sklearn_random_state(random_state), max_iter=200,
     ).fit(np.hstack([X, Xd]))
     theta = np.zeros(layout.size)

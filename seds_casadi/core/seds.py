@@ -21,11 +21,17 @@ import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin
 
 from .demonstrations import Demonstrations
-from .errors import ConvergenceWarning, SolverError
+from .errors import ConvergenceWarning, SolverError, StabilityError
 from .model_selection import bic_n_components
 from .objectives import approach_constraints
 from .parametrization import FORMULATIONS, LYAPUNOV, OBJECTIVES, stability_constraints
-from .problem import HESSIANS, SEDSProblem, build_problem, direction_weights
+from .problem import (
+    HESSIANS,
+    SPEED_CALIBRATIONS,
+    SEDSProblem,
+    build_problem,
+    direction_weights,
+)
 from .stable_ds import StableDS
 from .user_constraints import UserConstraints
 
@@ -86,9 +92,11 @@ class SEDS(RegressorMixin, BaseEstimator):
     Parameters
     ----------
     n_components : int or "bic", default 5
-        Number K of Gaussians; ``"bic"`` picks K in 1..15 by the BIC of a GMM on [x; xdot]
-        (:func:`~seds_casadi.core.model_selection.bic_n_components`, as SEDS and ds-opt do; the
-        scores are in ``fit_info["bic"]``). ``GridSearchCV`` over K is the held-out alternative.
+        Number K of Gaussians; ``"bic"`` picks K in 1..15 by the BIC of a GMM on [x; xdot] at
+        the elbow of the BIC curve, as ds-opt does
+        (:func:`~seds_casadi.core.model_selection.bic_n_components`; on smooth data the BIC
+        minimum lies at the largest K tried; the scores are in ``fit_info["bic"]``).
+        ``GridSearchCV`` over K is the held-out alternative.
     objective : {"direction", "mse", "likelihood"}, default "direction"
         ``"direction"``: the paper's Eq. 9 (weighted cosine between demonstrated and model
         velocities, weights of Eq. 11); ``"mse"`` and ``"likelihood"``: the original SEDS objectives
@@ -153,6 +161,10 @@ class SEDS(RegressorMixin, BaseEstimator):
         :class:`SolverError`). With the direction objective the gains are rescaled after the
         solve (``fit_info["speed_factor"]``), so constraints on the scale of ``A`` need
         ``objective="mse"`` or ``"likelihood"``.
+    speed_calibration : {"median", "least-squares"}, default "median"
+        How a direction-objective model gets the demonstrated speeds (Eq. 9 fixes only
+        directions; :meth:`SEDSProblem.speed_factor`): the median speed ratio along the
+        demonstrations made 1, or the least-squares factor (the former default).
     verbose : bool, default False
         Print IPOPT's iteration log.
     """
@@ -176,6 +188,7 @@ class SEDS(RegressorMixin, BaseEstimator):
         lyapunov: str = "identity",
         formulation: str = "by-construction",
         constraints=None,
+        speed_calibration: str = "median",
         verbose: bool = False,
     ) -> None:
         # scikit-learn convention: store the parameters as given; fit() validates them
@@ -196,6 +209,7 @@ class SEDS(RegressorMixin, BaseEstimator):
         self.lyapunov = lyapunov
         self.formulation = formulation
         self.constraints = constraints
+        self.speed_calibration = speed_calibration
         self.verbose = verbose
 
     def _validated(self) -> dict:
@@ -217,6 +231,9 @@ class SEDS(RegressorMixin, BaseEstimator):
         if self.constraints is not None and not callable(self.constraints):
             raise TypeError("constraints must be a callable model -> [(g, lower, upper), ...], "
                             f"got {type(self.constraints).__name__}")
+        if self.speed_calibration not in SPEED_CALIBRATIONS:
+            raise ValueError(f"unknown speed_calibration {self.speed_calibration!r}; valid: "
+                             f"{', '.join(SPEED_CALIBRATIONS)}")
         if self.hessian not in HESSIANS:
             raise ValueError(f"unknown hessian {self.hessian!r}; valid: {', '.join(HESSIANS)}")
         for name in ("omega_lower", "omega_upper"):
@@ -415,7 +432,8 @@ class SEDS(RegressorMixin, BaseEstimator):
         _LOG.info("%s: %s after %d iterations, %.1f s", label, status,
                   int(stats.get("iter_count", -1)), time.perf_counter() - t0)
         try:
-            c = prob.speed_factor(theta) if self.objective == "direction" else 1.0
+            c = (prob.speed_factor(theta, self.speed_calibration)
+                 if self.objective == "direction" else 1.0)
             priors, means, covs = prob.to_model_arrays(theta, speed_factor=c)
         except np.linalg.LinAlgError:
             raise SolverError(
@@ -439,8 +457,17 @@ class SEDS(RegressorMixin, BaseEstimator):
             "n_samples": int(prob.X.shape[0]), "hessian": prob.hessian,
             "compiled_kernels": prob.kernels.compiled, "solver": "ipopt",
         }
-        model = StableDS(priors, means, covs, prob.target, fit_info=info, status=status,
-                         lyapunov=lyap)
+        try:
+            model = StableDS(priors, means, covs, prob.target, fit_info=info, status=status,
+                             lyapunov=lyap)
+        except StabilityError as exc:
+            if prob.layout.formulation != "constrained":
+                raise
+            raise SolverError(
+                f"the constrained form ended at a point that violates Eq. 10 ({exc}; largest "
+                f"NLP constraint violation {viol:.3g}): IPOPT found no feasible optimum. Raise "
+                "max_iter, or use formulation='by-construction', which is stable at every "
+                "iterate", status) from None
         if user is not None:
             model.fit_info["user_constraint_violation"] = user.check(model, status)
         return model
