@@ -28,8 +28,11 @@ import numpy as np
 VARIANTS = {
     "plain": {},
     "learned": {"lyapunov": "learned"},
+    "plain-g10": {"gain_limit": 10.0},
+    "learned-g10": {"lyapunov": "learned", "gain_limit": 10.0},
     "constrained": {"formulation": "constrained"},
     "constrained-learned": {"formulation": "constrained", "lyapunov": "learned"},
+    "constrained-g10": {"formulation": "constrained", "gain_limit": 10.0},
 }
 NAMED = ("BendedLine", "Leaf_1", "JShape", "WShape")
 

@@ -310,3 +310,27 @@ def test_bad_options_are_refused():
         SEDS(1, formulation="penalty").fit(demos)
     with pytest.raises(TypeError, match="callable"):
         SEDS(1, constraints=[1, 2]).fit(demos)
+
+
+@pytest.mark.parametrize("lyapunov", ["identity", "learned"])
+def test_gain_limit_bounds_the_stiffness_of_every_component(lyapunov):
+    demos = _linear_demos(A=np.array([[-8.0, 3.0], [-3.0, -8.0]]), n=3)
+    X, Xd, _, _ = demos.stacked()
+    sx = np.sqrt(np.mean(np.sum(X**2, axis=1)) / 2)
+    sv = np.sqrt(np.mean(np.sum(Xd**2, axis=1)) / 2)
+    g, d = 0.3, 2
+    m = SEDS(2, objective="mse", random_state=0, gain_limit=g,
+             lyapunov=lyapunov).fit(demos).model_
+    free = SEDS(2, objective="mse", random_state=0, lyapunov=lyapunov).fit(demos).model_
+    # |B_ij| <= sqrt(g), |W_ij| <= g: ||B B^T|| <= ||B||_F^2, ||W - W^T|| <= 2 ||W||_F
+    bound = d * (d + 1) / 2 * g + 2 * np.sqrt(d * (d - 1) / 2) * g + MARGIN
+    P = m.lyapunov_matrix
+    for A in m.A:
+        A_scaled = A * sx / sv
+        if lyapunov == "learned":  # A = P^-1 S: ||A|| <= ||P^-1|| ||S||, P of trace d
+            assert np.linalg.norm(P @ A_scaled, 2) <= bound * (1 + 1e-6)
+        else:
+            assert np.linalg.norm(A_scaled, 2) <= bound * (1 + 1e-6)
+    assert max(np.linalg.norm(A, 2) for A in free.A) > max(np.linalg.norm(A, 2) for A in m.A)
+    with pytest.raises(ValueError, match="gain_limit"):
+        SEDS(1, gain_limit=-1.0).fit(demos)

@@ -260,7 +260,8 @@ def build_problem(demos: Demonstrations, n_components: int, objective: str,
                   omega_lower: float = 1.0, omega_upper: float = 2.0,
                   stability_margin: float = 1e-3, random_state=None,
                   compile: bool = True, hessian: str = "auto", lyapunov: str = "identity",
-                  formulation: str = "by-construction") -> SEDSProblem:
+                  formulation: str = "by-construction",
+                  gain_limit: float | None = None) -> SEDSProblem:
     """Scale the data, initialise by k-means + EM and build the CasADi problem.
 
     Parameters are those of :class:`~seds_casadi.core.seds.SEDS` (already validated). With
@@ -295,7 +296,7 @@ def build_problem(demos: Demonstrations, n_components: int, objective: str,
         w = np.ones(len(X))
     P0 = estimate_lyapunov(Xs, Xds) if lyapunov == "learned" else None
     theta0 = _initial_theta(layout, Xs, Xds, stability_margin, random_state, P0)
-    lbx, ubx = _bounds(layout)
+    lbx, ubx = _bounds(layout, gain_limit)
     theta0 = np.clip(theta0, lbx + 1e-9, ubx - 1e-9)
     if objective == "direction":  # Eq. 9: w_i cos = (w_i / |xdot_i|) xdot_i . f / |f|
         speed = np.linalg.norm(Xds, axis=1)
@@ -380,11 +381,13 @@ def check_approach(demos: Demonstrations, X: np.ndarray, Xd: np.ndarray) -> None
                       "or trim the demonstrations.", ConvergenceWarning, stacklevel=4)
 
 
-def _bounds(layout: Layout) -> tuple[np.ndarray, np.ndarray]:
+def _bounds(layout: Layout, gain_limit: float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Simple bounds on theta: means within +-50 (scaled units), exp-parametrised diagonals of
     the Cholesky factors within [1e-3, 1e2]; raw priors (constrained form) within [1e-8, 1]
     (Eq. 10d); L_P's log-diagonal within :data:`~seds_casadi.core.lyapunov.LYAPUNOV_DIAG_RANGE`
-    and its off-diagonal within +-10, which bounds P's condition number."""
+    and its off-diagonal within +-10, which bounds P's condition number. With ``gain_limit`` g:
+    the entries of B_k within +-sqrt(g) and of W_k within +-g (constrained form: the entries of
+    A_k within +-d g), which bounds the stiffness of every A_k."""
     lbx = np.full(layout.size, -np.inf)
     ubx = np.full(layout.size, np.inf)
     diag_pos = [i for i, (a, b) in enumerate(layout.tril) if a == b]
@@ -397,6 +400,18 @@ def _bounds(layout: Layout) -> tuple[np.ndarray, np.ndarray]:
             if name in s:
                 idx = np.arange(s[name].start, s[name].stop)[diag_pos]
                 lbx[idx], ubx[idx] = np.log(1e-3), np.log(1e2)
+    if gain_limit is not None:
+        g = float(gain_limit)
+        for k in range(layout.K):
+            s = layout.slices(k)
+            if "B" in s:
+                idx = np.arange(s["B"].start, s["B"].stop)
+                off = np.setdiff1d(idx, idx[diag_pos])
+                lbx[off], ubx[off] = -np.sqrt(g), np.sqrt(g)
+                ubx[idx[diag_pos]] = np.minimum(ubx[idx[diag_pos]], 0.5 * np.log(g))
+                lbx[s["W"]], ubx[s["W"]] = -g, g
+            else:
+                lbx[s["A"]], ubx[s["A"]] = -layout.d * g, layout.d * g
     if layout.n_lyapunov:
         sl = layout.lyapunov_slice
         lbx[sl], ubx[sl] = -10.0, 10.0

@@ -165,6 +165,14 @@ class SEDS(RegressorMixin, BaseEstimator):
         How a direction-objective model gets the demonstrated speeds (Eq. 9 fixes only
         directions; :meth:`SEDSProblem.speed_factor`): the median speed ratio along the
         demonstrations made 1, or the least-squares factor (the former default).
+    gain_limit : float or None, default None
+        Bound the stiffness of the components: the entries of B_k within +-sqrt(g) and of W_k
+        within +-g (A_k = -(B_k B_k^T + m I) + W_k - W_k^T; constrained form: the entries of
+        A_k within +-d g), in the scaled frame where positions and velocities have unit RMS, so
+        every |eigenvalue of A_k| stays within about d g times the data's own rate. Without it
+        a thin component can reach rates of hundreds per second that explicit integrators at
+        the data's step cannot follow (on LASA, forward Euler at 0.01 s diverged from a rate of
+        540/s). None: unbounded, as SEDS (measured in ``benchmarks/README.md``).
     verbose : bool, default False
         Print IPOPT's iteration log.
     """
@@ -189,6 +197,7 @@ class SEDS(RegressorMixin, BaseEstimator):
         formulation: str = "by-construction",
         constraints=None,
         speed_calibration: str = "median",
+        gain_limit: float | None = None,
         verbose: bool = False,
     ) -> None:
         # scikit-learn convention: store the parameters as given; fit() validates them
@@ -210,6 +219,7 @@ class SEDS(RegressorMixin, BaseEstimator):
         self.formulation = formulation
         self.constraints = constraints
         self.speed_calibration = speed_calibration
+        self.gain_limit = gain_limit
         self.verbose = verbose
 
     def _validated(self) -> dict:
@@ -231,6 +241,10 @@ class SEDS(RegressorMixin, BaseEstimator):
         if self.constraints is not None and not callable(self.constraints):
             raise TypeError("constraints must be a callable model -> [(g, lower, upper), ...], "
                             f"got {type(self.constraints).__name__}")
+        if self.gain_limit is not None and not (np.isfinite(self.gain_limit)
+                                                and self.gain_limit > 0):
+            raise ValueError(f"gain_limit must be a positive number or None, got "
+                             f"{self.gain_limit!r}")
         if self.speed_calibration not in SPEED_CALIBRATIONS:
             raise ValueError(f"unknown speed_calibration {self.speed_calibration!r}; valid: "
                              f"{', '.join(SPEED_CALIBRATIONS)}")
@@ -274,7 +288,8 @@ class SEDS(RegressorMixin, BaseEstimator):
             K = bic_n_components(Xs, Xd, random_state=self.random_state)[0]
         return build_problem(demos, K, self.objective, self.omega_lower,
                              self.omega_upper, self.stability_margin, self.random_state,
-                             self.compile, self.hessian, self.lyapunov, self.formulation)
+                             self.compile, self.hessian, self.lyapunov, self.formulation,
+                             self.gain_limit)
 
     def fit(self, X, y=None, target=None) -> SEDS:
         """Learn a certified globally stable DS from demonstrations.
