@@ -191,8 +191,13 @@ def _add_play(sub, quiet) -> None:
     pl.add_argument("--train-size", type=int, default=None, metavar="N",
                     help="train the learners on N equally spaced situations of the teacher's "
                          "data set (as Table 1's equally spaced rows) [all]")
+    pl.add_argument("--replay", type=int, nargs="?", const=1, default=0, metavar="N",
+                    help="replay the first learner's first N shots (N: 1 when left out): "
+                         "OUT/replay.html (a 3-D page that works offline) and a GIF per shot "
+                         "[no replay]")
     pl.add_argument("--quick", action="store_true",
-                    help="3 situations, a coarse teacher, 1 exudyn check: under a minute")
+                    help="3 situations, a coarse teacher, 1 exudyn check (about 15 s after "
+                         "the first run's compilation)")
     pl.add_argument("--out", default="play_out", help="output folder [play_out]")
 
 
@@ -268,7 +273,7 @@ def _cmd_play(a) -> int:
     play(PlayConfig(robot=a.robot, field=a.field, demos=a.demos, learners=tuple(a.learner),
                     shots=a.shots, seed=a.seed, out=a.out, models=a.models, quick=a.quick,
                     validate_shots=a.validate, workers=a.workers, dask=a.dask,
-                    train_size=a.train_size, strategies=a.strategies,
+                    train_size=a.train_size, strategies=a.strategies, replay=a.replay,
                     progress=not a.quiet))
     return 0
 

@@ -92,6 +92,9 @@ class PlayConfig:
         Address of a Dask scheduler (overrides ``workers``).
     progress : bool
         Progress bars (on stderr, only on a terminal).
+    replay : int
+        Replay the first learner's first ``replay`` shots (:mod:`seds_casadi.app.replay`):
+        ``replay.html`` and a GIF per shot in ``out`` (0: none).
     """
 
     robot: str = "wam"
@@ -109,8 +112,10 @@ class PlayConfig:
     progress: bool = True
     train_size: int | None = None
     strategies: str | int | None = None
+    replay: int = 0
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "replay", whole_number("replay", self.replay, 0))
         object.__setattr__(self, "learners", names_tuple("learner", self.learners,
                                                          _VALID_LEARNERS))
         object.__setattr__(self, "shots", whole_number("shots", self.shots, 1))
@@ -183,6 +188,8 @@ def play_shot(task: dict) -> dict:
         row["error"] = str(exc)
         return row
     if not swing.hit:
+        if task.get("keep_swing"):
+            row["swing"] = swing
         return row
     launch = impact(swing.hit_velocity[None], face_normal=swing.face_normal[None],
                     club_mass=swing.effective_mass)
@@ -191,6 +198,8 @@ def play_shot(task: dict) -> dict:
                direction_error_deg=swing.direction_error_deg, speed_error=swing.speed_error,
                final_x_m=float(res.final_position[0, 0]),
                final_y_m=float(res.final_position[0, 1]), path=res.paths[0])
+    if task.get("keep_swing"):  # for a replay (seds_casadi.app.replay)
+        row["swing"] = swing
     return row
 
 
@@ -430,6 +439,15 @@ def play(config: PlayConfig | None = None, **overrides) -> dict:
     _figures(fld, motion, data, fitted, rows, cfg.learners, cfg.out)
     if strategies is not None:
         _strategy_figure(fld, strategies, rows, cfg.learners[0], cfg.out)
+    if cfg.replay:
+        from .replay import write_replay
+
+        t5 = time.perf_counter()
+        mine = [t for t in tasks if t["method"] == cfg.learners[0]][:cfg.replay]
+        write_replay(mine, cfg.out, progress=_LOG.info)
+        times["replay"] = time.perf_counter() - t5
+        _LOG.info("wrote the replay of %d shots: %s and GIFs (%.1f s)", len(mine),
+                  os.path.join(cfg.out, "replay.html"), times["replay"])
     _LOG.info("%s", text.rstrip("\n"))
     _LOG.info("wrote %s, summary.txt, figures and models/ in %s",
               os.path.join(cfg.out, "shots.csv"), cfg.out)
