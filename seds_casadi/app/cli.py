@@ -195,6 +195,9 @@ def _add_play(sub, quiet) -> None:
                     help="replay the first learner's first N shots (N: 1 when left out): "
                          "OUT/replay.html (a 3-D page that works offline) and a GIF per shot "
                          "[no replay]")
+    pl.add_argument("--no-cache", action="store_true",
+                    help="teach again even when the teacher's data set for this field and "
+                         "motion is in the cache (~/.cache/seds_casadi/teacher)")
     pl.add_argument("--quick", action="store_true",
                     help="3 situations, a coarse teacher, 1 exudyn check (about 15 s after "
                          "the first run's compilation)")
@@ -274,6 +277,7 @@ def _cmd_play(a) -> int:
                     shots=a.shots, seed=a.seed, out=a.out, models=a.models, quick=a.quick,
                     validate_shots=a.validate, workers=a.workers, dask=a.dask,
                     train_size=a.train_size, strategies=a.strategies, replay=a.replay,
+                    cache=not a.no_cache,
                     progress=not a.quiet))
     return 0
 

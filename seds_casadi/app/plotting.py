@@ -309,8 +309,9 @@ def plot_joint_gmm(model, outputs: np.ndarray, ax_row=None, names=("alpha [deg]"
     return ax_row
 
 
-def plot_field(field, ax=None, paths=None, sunk=None, ball=None, hole=None, n: int = 200):
-    """The field's height map with ball paths (green: sunk, red: missed).
+def plot_field(field, ax=None, paths=None, sunk=None, ball=None, hole=None, n: int = 200,
+               checked=None, legend: bool = True):
+    """The field's height map with ball paths (green: sunk, red: missed) and a key.
 
     Parameters
     ----------
@@ -318,7 +319,13 @@ def plot_field(field, ax=None, paths=None, sunk=None, ball=None, hole=None, n: i
     paths : list of array (T, 2), optional
     sunk : array of bool, optional
     ball, hole : array, shape (2,) or (n, 2), optional
+    checked : list of (ball (2,), agreed: bool), optional
+        Shots checked again in exudyn: a diamond at the ball, filled when exudyn agreed.
+    legend : bool
+        A key of the paths, balls, holes and checks drawn.
     """
+    from matplotlib.lines import Line2D
+
     plt = _plt()
     if ax is None:
         _, ax = plt.subplots(figsize=(8, 3.4))
@@ -326,22 +333,36 @@ def plot_field(field, ax=None, paths=None, sunk=None, ball=None, hole=None, n: i
     X, Y = np.meshgrid(np.linspace(b[0], b[1], n), np.linspace(b[2], b[3], max(20, n // 3)))
     Z = field.surface.height(np.column_stack([X.ravel(), Y.ravel()])).reshape(X.shape)
     im = ax.contourf(X, Y, Z * 100, levels=20, cmap="terrain")
-    plt.colorbar(im, ax=ax, label="height [cm]", shrink=0.8)
+    plt.colorbar(im, ax=ax, label="surface height [cm]", shrink=0.8)
     holes = np.atleast_2d(field.hole if hole is None else hole)
     for h in holes:
         ax.add_patch(plt.Circle(h, field.hole_radius, color="k", fill=False, lw=1.2))
+    key = [Line2D([], [], color="k", marker="o", mfc="none", ms=8, ls="", label="hole")]
     for i, p in enumerate(paths or []):
         ok = bool(sunk[i]) if sunk is not None else True
         ax.plot(p[:, 0], p[:, 1], "-", color="g" if ok else "r", lw=0.9, alpha=0.8)
+    if paths:
+        found = {bool(sunk[i]) if sunk is not None else True for i in range(len(paths))}
+        key += [Line2D([], [], color=c, label=lab) for ok, c, lab in
+                ((True, "g", "ball path, sunk"), (False, "r", "ball path, missed")) if ok in found]
     if ball is not None:
         B = np.atleast_2d(ball)
         ax.plot(B[:, 0], B[:, 1], "wo", mec="k", ms=4)
+        key.append(Line2D([], [], color="w", marker="o", mec="k", ms=4, ls="", label="ball"))
+    for xy, agreed in checked or []:
+        ax.plot(*xy, "D", ms=9, mec="m", mfc="m" if agreed else "none", mew=1.5, alpha=0.8)
+    if checked:
+        key.append(Line2D([], [], color="m", marker="D", ms=7, ls="",
+                          label="checked in exudyn (filled: agrees)"))
     ax.set_aspect("equal")
     ax.set_xlim(b[0], b[1])
     ax.set_ylim(b[2], b[3])
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.set_title(field.name, fontsize=9)
+    if legend:
+        ax.legend(handles=key, fontsize=7, loc="upper left", bbox_to_anchor=(1.18, 1.0),
+                  frameon=False)
     return ax
 
 
