@@ -2,10 +2,11 @@
 
 Both have exactly the same streamlines, but h keeps unit speed up to the target (colour: speed).
 
-python examples/fig2_target_field.py [--out fig2.png] [--quick]
+python examples/fig2_target_field.py [--out examples_out/fig2.png] [--quick]
 """
 
 import argparse
+import os
 
 import matplotlib
 
@@ -18,9 +19,11 @@ from seds_casadi.core.datasets import load_lasa
 from seds_casadi.motion.hitting import TargetField
 
 ap = argparse.ArgumentParser()
-ap.add_argument("--out", default="fig2.png")
+ap.add_argument("--out", default="examples_out/fig2.png",
+                help="the figure's file; its folder is made [examples_out/fig2.png]")
 ap.add_argument("--quick", action="store_true", help="smaller data for CI")
 args = ap.parse_args()
+os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
 
 demos = load_lasa("Angle", n_samples=30 if args.quick else 100)
 ds = SEDS(n_components=2, objective="direction", random_state=0).fit(demos).model_

@@ -1,10 +1,11 @@
 """Paper Fig. 6 (c)-(f): reproductions of the hitting motion against the demonstrations, and the
 velocity profiles along x, y and z.
 
-python examples/fig6_reproductions.py [--out fig6.png] [--quick]
+python examples/fig6_reproductions.py [--out examples_out/fig6.png] [--quick]
 """
 
 import argparse
+import os
 
 import matplotlib
 
@@ -15,9 +16,11 @@ import numpy as np  # noqa: E402
 from seds_casadi.motion import HittingMotion, load_hitting_demos
 
 ap = argparse.ArgumentParser()
-ap.add_argument("--out", default="fig6.png")
+ap.add_argument("--out", default="examples_out/fig6.png",
+                help="the figure's file; its folder is made [examples_out/fig6.png]")
 ap.add_argument("--quick", action="store_true", help="fewer demonstrations for CI")
 args = ap.parse_args()
+os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
 
 demos = load_hitting_demos()
 motion = HittingMotion.fit(demos)

@@ -7,10 +7,11 @@ printed gives the direction error at impact against the (moved) commanded direct
 pushed late (8 cm before the club reaches it) cannot be hit along the new direction: the club
 turns sharply and arrives tens of degrees off, as a human player's would.
 
-python examples/fig8_perturbations.py [--out fig8.png] [--quick]
+python examples/fig8_perturbations.py [--out examples_out/fig8.png] [--quick]
 """
 
 import argparse
+import os
 
 import matplotlib
 
@@ -22,9 +23,11 @@ from seds_casadi.motion import HittingMotion, load_hitting_demos
 from seds_casadi.robots import default_base, load_robot, simulate_swing
 
 ap = argparse.ArgumentParser()
-ap.add_argument("--out", default="fig8.png")
+ap.add_argument("--out", default="examples_out/fig8.png",
+                help="the figure's file; its folder is made [examples_out/fig8.png]")
 ap.add_argument("--quick", action="store_true", help="fewer pushes for CI")
 args = ap.parse_args()
+os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
 
 motion = HittingMotion.fit(load_hitting_demos(), n_components=3)
 robot = load_robot("wam", base=default_base("wam"))

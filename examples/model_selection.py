@@ -2,10 +2,11 @@
 for the hitting-parameter GMR; the figure shows the cross-validated R^2 against K and the
 streamlines of the chosen SEDS model.
 
-python examples/model_selection.py [--out model_selection.png] [--quick]
+python examples/model_selection.py [--out examples_out/model_selection.png] [--quick]
 """
 
 import argparse
+import os
 import warnings
 
 import matplotlib
@@ -21,9 +22,11 @@ from seds_casadi.core.datasets import load_lasa  # noqa: E402
 from seds_casadi.minigolf.parameters import GMRModel  # noqa: E402
 
 ap = argparse.ArgumentParser()
-ap.add_argument("--out", default="model_selection.png")
+ap.add_argument("--out", default="examples_out/model_selection.png",
+                help="the figure's file; its folder is made [examples_out/model_selection.png]")
 ap.add_argument("--quick", action="store_true", help="smaller data for CI")
 args = ap.parse_args()
+os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
 
 # SEDS: samples of 7 LASA demonstrations; a fold holds out whole demonstrations
 demos = load_lasa("Sshape", n_samples=25 if args.quick else 60)

@@ -207,7 +207,7 @@ def _add_play(sub, quiet) -> None:
 def _cmd_fit(a) -> int:
     from ..core.demonstrations import load_demonstrations
     from ..core.seds import SEDS
-    from .plotting import _plt, plot_streamlines, save_figure
+    from .plotting import save_figure
 
     kw = {"dt": a.dt} if a.dt is not None else {}
     demos = load_demonstrations(a.demonstrations, **kw)
@@ -220,9 +220,10 @@ def _cmd_fit(a) -> int:
     starts = [p[0] for p in demos.positions]
     span = max(float(max(abs(p - demos.target).max() for p in demos.positions)), 1e-9)
     repro = model.rollout(starts, dt=demos.estimated_dt(), tol=1e-3 * span, max_steps=20000)
-    fig, ax = _plt().subplots(figsize=(5.5, 5))
-    plot_streamlines(model, demos, repro, ax=ax,
-                     title=f"SEDS ({a.objective}, K={model.n_components})")
+    from .plotting import plot_fit_views
+
+    fig = plot_fit_views(model, demos, repro, title=f"{os.path.basename(a.demonstrations)}: "
+                         f"SEDS ({a.objective}, K={model.n_components})")
     save_figure(fig, os.path.join(a.out, "streamlines.png"))
     info = {k: model.fit_info[k] for k in ("status", "iterations", "objective", "seconds")}
     print(json.dumps(info, indent=1))

@@ -460,7 +460,7 @@ def evaluate_shape_dsopt(shape: str, objective: str = "mse", n_components: int |
         fig, ax = _plt().subplots(figsize=(5, 4.5))
         plot_streamlines(model, test.demonstrations(),
                          [paths["test"][:, n] for n in range(len(test.demos))], ax=ax,
-                         title=f"{shape} · {objective} · ds-opt test · K={K}")
+                         title=f"{shape} · {objective} · ds-opt test · K={K}", unit="mm")
         save_figure(fig, figure_path)
     return rows
 
@@ -521,7 +521,7 @@ def evaluate_shape(shape: str, objective: str = "direction", protocol: str = "al
         from .plotting import _plt, plot_streamlines, save_figure
 
         fig, ax = _plt().subplots(figsize=(5, 4.5))
-        plot_streamlines(model, test, repro, ax=ax,
+        plot_streamlines(model, test, repro, ax=ax, unit="mm",
                          title=f"{shape} · {objective} · {protocol} · K={n_components}")
         save_figure(fig, figure_path)
     return LasaResult(shape, objective, protocol, velocity_rmse(F, V), direction_error(F, V),
