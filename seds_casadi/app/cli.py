@@ -40,7 +40,7 @@ def build_parser() -> argparse.ArgumentParser:
                        help="print only warnings and errors: no progress messages or bars "
                             "(bars show only on a terminal anyway)")
     _add_fit(sub, quiet)
-    _add_lasa(sub)
+    _add_lasa(sub, quiet)
     _add_table1(sub, quiet)
     _add_validate(sub, quiet)
     _add_play(sub, quiet)
@@ -76,7 +76,7 @@ def _add_fit(sub, quiet) -> None:
     f.add_argument("--out", default="seds_out", help="output folder [seds_out]")
 
 
-def _add_lasa(sub) -> None:
+def _add_lasa(sub, quiet) -> None:
     from ..core.datasets import LASA_SHAPES
     from ..core.parametrization import OBJECTIVES
     from .lasa import DEFAULT_PROTOCOLS, PROTOCOLS
@@ -93,7 +93,7 @@ def _add_lasa(sub) -> None:
             raise argparse.ArgumentTypeError(f"K must be at least 1, got {k}")
         return k
 
-    la = sub.add_parser("lasa", help="run the LASA handwriting benchmark",
+    la = sub.add_parser("lasa", help="run the LASA handwriting benchmark", parents=[quiet],
                         description="Fit LASA shapes, score reproductions (RMSE, e_dot, DTW) "
                                     "and write lasa.csv (lasa_dsopt.csv for --protocol ds-opt), "
                                     "summary.txt and figures to --out.")
@@ -245,7 +245,8 @@ def _cmd_lasa(a) -> int:
     results = run_lasa(shapes=shapes, objectives=objectives, protocols=protocols,
                        n_components=a.components, n_samples=a.samples, random_state=a.seed,
                        out_dir=a.out, figures=not a.no_figures, workers=a.workers,
-                       dask=a.dask, dsopt_objectives=dsopt_objectives, k_max=a.k_max)
+                       dask=a.dask, dsopt_objectives=dsopt_objectives, k_max=a.k_max,
+                       progress=not a.quiet)
     print(summary_table(results))
     names = (["lasa.csv"] if set(protocols) - {"ds-opt"} else []) + \
         (["lasa_dsopt.csv"] if "ds-opt" in protocols else []) + ["summary.txt"]
@@ -297,7 +298,8 @@ class _PlainHandler(logging.Handler):
 
 
 @contextlib.contextmanager
-def command_logging(quiet: bool = False, names: tuple[str, ...] = ("seds_casadi.app",)
+def command_logging(quiet: bool = False,
+                    names: tuple[str, ...] = ("seds_casadi.app", "seds_casadi.progress")
                     ) -> Iterator[None]:
     """For the duration of a command: the named loggers (default the commands' own,
     ``seds_casadi.app.*``) print their messages plainly, progress (INFO) on stdout, or with
@@ -322,6 +324,7 @@ def command_logging(quiet: bool = False, names: tuple[str, ...] = ("seds_casadi.
 #: loggers whose progress a command shows: ``fit`` also shows the solver's progress lines and
 #: the compiler's ("compiling ..."), which a first fit in a new dimension can take a while on
 _COMMAND_LOGGERS = {"fit": ("seds_casadi.app", "seds_casadi.core", "seds_casadi.codegen")}
+_DEFAULT_LOGGERS = ("seds_casadi.app", "seds_casadi.progress")
 
 
 _COMMANDS = {"fit": _cmd_fit, "lasa": _cmd_lasa, "table1": _cmd_table1,
@@ -342,7 +345,7 @@ def main(argv: list[str] | None = None) -> int:
     warnings.simplefilter("always", ConvergenceWarning)
     try:
         with command_logging(quiet=getattr(a, "quiet", False),
-                             names=_COMMAND_LOGGERS.get(a.command, ("seds_casadi.app",))):
+                             names=_COMMAND_LOGGERS.get(a.command, _DEFAULT_LOGGERS)):
             return _COMMANDS[a.command](a)
     except (ValueError, TypeError, FileNotFoundError, SEDSError) as exc:
         print(f"seds-casadi {a.command}: error: {exc}", file=sys.stderr)

@@ -637,9 +637,9 @@ def run_lasa(shapes=None, objectives=None, protocols=DEFAULT_PROTOCOLS,
             tasks.append(dict(shape=s, objective=o, protocol="ds-opt", n_components=d_k,
                               k_max=int(k_max), random_state=random_state, bic_rule=bic_rule,
                               figure_path=fp))
-    from tqdm.auto import tqdm
+    from ..minigolf._progress import progress_bar
 
-    bar = tqdm(total=len(tasks), desc="LASA fits", unit="fit", disable=not progress)
+    bar = progress_bar(None, progress, total=len(tasks), desc="LASA fits", unit="fit")
     results: list[LasaResult | DsOptResult] = []
     from .executors import open_executor
 
