@@ -47,6 +47,21 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+def _robot_help() -> str:
+    try:
+        from ..robots.models import robot_names
+    except ImportError:  # a core-only install: no robots to list
+        return "a robot name (install the [robots] extra) [wam]"
+    return (f"a robot name: {', '.join(robot_names())} (the arms other than wam and katana "
+            f"come from example-robot-data) [wam]")
+
+
+def _field_help(default: str) -> str:
+    from ..minigolf.fields import field_names
+
+    return f"a field name ({', '.join(field_names())}) or a .json field file [{default}]"
+
+
 def _components(text: str) -> int | str:
     if text == "bic":
         return text
@@ -70,7 +85,8 @@ def _add_fit(sub, quiet) -> None:
     f.add_argument("--objective", choices=OBJECTIVES, default="direction",
                    help="objective [direction]")
     f.add_argument("--dt", type=float, default=None,
-                   help="time step [s] if the file has neither velocities nor time stamps")
+                   help="time step [s] of the samples, needed only when the file has neither "
+                        "velocities nor time stamps [from the file]")
     f.add_argument("--seed", type=int, default=0, help="random seed of the initialisation [0]")
     f.add_argument("--max-iter", type=int, default=1000, help="IPOPT iteration limit [1000]")
     f.add_argument("--out", default="seds_out", help="output folder [seds_out]")
@@ -135,7 +151,9 @@ def _add_table1(sub, quiet) -> None:
                                    "shots on each field, and compare GPR and GMR for the "
                                    "hitting parameters as in the paper's Table 1.")
     t.add_argument("--field", nargs="+", default=list(TABLE1_FIELDS), metavar="FIELD",
-                   help="field names or .json field files [rough_flat double_hill arctan]")
+                   help=_field_help("rough_flat double_hill arctan").replace(
+                       "a field name", "field names").replace("a .json field file",
+                                                              ".json field files"))
     t.add_argument("--repetitions", type=int, default=100, help="repetitions [100]")
     t.add_argument("--seed", type=int, default=0, help="random seed [0]")
     t.add_argument("--workers", type=int, default=1, help="local worker processes [1]")
@@ -155,10 +173,14 @@ def _add_validate(sub, quiet) -> None:
                        description="Shots chosen by the learned hitting-parameter model and "
                                    "executed by the robot's controller, played on the fast ball "
                                    "model and in exudyn (ball on the field mesh with contact).")
-    v.add_argument("--robot", default="wam", help="robot name [wam]")
-    v.add_argument("--field", default="flat", help="field name or .json file [flat]")
+    v.add_argument("--robot", default="wam", help=_robot_help())
+    v.add_argument("--field", default="flat", help=_field_help("flat"))
     v.add_argument("--shots", type=int, default=10, help="number of shots [10]")
     v.add_argument("--seed", type=int, default=0, help="random seed [0]")
+    v.add_argument("--workers", type=int, default=1,
+                   help="local worker processes for the shots [1]")
+    v.add_argument("--quick", action="store_true",
+                   help="at most 3 shots and a coarser teacher: a check in about half a minute")
     v.add_argument("--out", default="validate_out", help="output folder [validate_out]")
 
 
@@ -169,8 +191,8 @@ def _add_play(sub, quiet) -> None:
                                     "good shots, learn the hitting parameters (GPR and GMR) and "
                                     "play a round of shots with the robot on the field's ball "
                                     "model, a few checked in exudyn.")
-    pl.add_argument("--robot", default="wam", help="robot name or .urdf [wam]")
-    pl.add_argument("--field", default="arctan", help="field name or .json file [arctan]")
+    pl.add_argument("--robot", default="wam", help=_robot_help())
+    pl.add_argument("--field", default="arctan", help=_field_help("arctan"))
     pl.add_argument("--demos", default=None, help="hitting demonstrations (.npz/.csv) [shipped]")
     pl.add_argument("--learner", nargs="+", default=["gpr", "gmr"],
                     choices=["gpr", "gmr", "sep_gmr"], help="hitting-parameter learners [gpr gmr]")
@@ -268,7 +290,7 @@ def _cmd_validate(a) -> int:
     from .validate import ValidateConfig, validate
 
     validate(ValidateConfig(robot=a.robot, field=a.field, shots=a.shots, out=a.out, seed=a.seed,
-                            progress=not a.quiet))
+                            quick=a.quick, workers=a.workers, progress=not a.quiet))
     return 0
 
 
