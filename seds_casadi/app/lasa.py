@@ -75,7 +75,11 @@ PROTOCOLS = ("all", "split", "ds-opt")
 #: what :func:`run_lasa` and ``seds-casadi lasa`` run unless told otherwise
 DEFAULT_PROTOCOLS = ("all", "split")
 _CONVERGED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
-CSV_COLUMNS = ("shape", "objective", "protocol", "rmse", "e_dot", "dtwd", "seconds", "iterations")
+#: columns of ``lasa.csv``; a unit ends the name (the LASA data are in mm): the velocity RMSE
+#: [mm/s], the DTW distance [mm], the fit's time [s]; e_dot (in [0, 2]) and iterations have none
+CSV_COLUMNS = ("shape", "objective", "protocol", "rmse_mmps", "e_dot", "dtwd_mm", "seconds",
+               "iterations")
+_CSV_FIELDS = {"rmse_mmps": "rmse", "dtwd_mm": "dtwd"}   # column -> LasaResult's attribute
 DSOPT_COLUMNS = ("shape", "objective", "set", "rmse_mmps", "e_dot", "dtwd_mm", "seconds",
                  "iterations", "n_components", "certified", "status", "k_choice", "seconds_k",
                  "repro_points", "max_end_distance_mm", "max_rate_per_s",
@@ -669,9 +673,11 @@ def run_lasa(shapes=None, objectives=None, protocols=DEFAULT_PROTOCOLS,
 
 
 def write_csv(results: list[LasaResult], path: str) -> None:
-    """Write results with the columns ``shape, objective, protocol, rmse, e_dot, dtwd, seconds,
-    iterations`` (atomically: a partial file is never left under the final name)."""
-    atomic_csv(path, CSV_COLUMNS, ([asdict(r)[c] for c in CSV_COLUMNS] for r in results))
+    """Write results with the columns :data:`CSV_COLUMNS` (``shape, objective, protocol,
+    rmse_mmps, e_dot, dtwd_mm, seconds, iterations``; atomically: a partial file is never left
+    under the final name)."""
+    atomic_csv(path, CSV_COLUMNS, ([asdict(r)[_CSV_FIELDS.get(c, c)] for c in CSV_COLUMNS]
+                                   for r in results))
 
 
 def summary_table(results: list[LasaResult | DsOptResult]) -> str:

@@ -192,7 +192,7 @@ def write_replay_html(replays: list[Replay], field, path: str | os.PathLike) -> 
     return os.fspath(path)
 
 
-def write_replay_gif(replay: Replay, field, path: str | os.PathLike, max_frames: int = 80,
+def write_replay_gif(replay: Replay, field, path: str | os.PathLike, max_frames: int = 60,
                      fps: float = 12.0, dpi: int = 90) -> str:
     """Write one shot as an animated GIF (matplotlib 3-D axes, Pillow) to ``path``.
 

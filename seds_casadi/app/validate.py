@@ -85,7 +85,10 @@ def _learn(fld, robot: str, progress: bool, quick: bool = False):
                            resolution=(81, 26) if quick else (121, 41), progress=progress)
     check_reach(robot, fld, data.ball, data.alpha, motion.hitting_direction,
                 "situations the teacher taught")
-    model = make_model("gpr").fit(data.situations, data.outputs)
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(1):   # see play: BLAS threads slow small GPR fits down
+        model = make_model("gpr").fit(data.situations, data.outputs)
     _LOG.info("hitting motion, teacher (%d good shots) and GPR: %.1f s", len(data),
               time.perf_counter() - t0)
     return motion, data, model
