@@ -20,9 +20,9 @@ _LOG = logging.getLogger("seds_casadi.progress")
 LOG_EVERY = 10.0
 
 
-def _terminal() -> bool:
+def _terminal(stream=None) -> bool:
     try:
-        return bool(sys.stderr.isatty())
+        return bool((sys.stderr if stream is None else stream).isatty())
     except (AttributeError, ValueError):
         return False
 
@@ -81,7 +81,7 @@ def progress_bar(iterable: Iterable | None = None, enabled: bool = True, **kwarg
 
     if not enabled:
         return tqdm(iterable, disable=True, **kwargs)
-    if _terminal():
+    if _terminal(kwargs.get("file")):   # tqdm writes to file= (default stderr)
         return tqdm(iterable, **kwargs)
     return _LogLines(iterable, kwargs.get("total"), kwargs.get("desc", "progress"),
                      kwargs.get("unit", "it"))
