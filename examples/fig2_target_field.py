@@ -38,11 +38,17 @@ for ax, (name, F) in zip(axes, (("SEDS model f(x)", ds.predict(G)), ("target fie
     speed = np.linalg.norm(F, axis=1).reshape(gx.shape)
     ax.streamplot(gx, gy, F[:, 0].reshape(gx.shape), F[:, 1].reshape(gx.shape), color=speed,
                   cmap="viridis", density=1.3, linewidth=0.8)
-    for p in demos.positions:
-        ax.plot(p[:, 0], p[:, 1], ".", color="tab:red", ms=2)
-    ax.plot(*ds.target, "k*", ms=12)
-    ax.set_title(f"{name}: speed {speed.min():.2g} .. {speed.max():.2g}", fontsize=9)
+    for k, p in enumerate(demos.positions):
+        ax.plot(p[:, 0], p[:, 1], ".", color="tab:red", ms=2,
+                label="LASA Angle demonstrations" if k == 0 else None)
+    ax.plot(*ds.target, "k*", ms=12, ls="", label="target")
+    unit = "mm/s" if name.startswith("SEDS") else "dimensionless"
+    ax.set_title(f"{name}: speed {speed.min():.2g} .. {speed.max():.2g} ({unit}; colour)",
+                 fontsize=9)
     ax.set_aspect("equal")
+    ax.set_xlabel("x1 [mm]")
+    ax.set_ylabel("x2 [mm]")
+    ax.legend(fontsize=7, loc="lower left")
 fig.suptitle("Fig. 2: SEDS streamlines vs the target field (same streamlines, unit speed)")
 fig.savefig(args.out, dpi=110, bbox_inches="tight")
 print(f"wrote {args.out}")

@@ -61,7 +61,7 @@ axs[0].set_title("GridSearchCV over K")
 axs[0].legend()
 starts = [p[0] for p in demos.positions]
 plot_streamlines(best, demos, best.rollout(starts, dt=0.05, tol=1.0), ax=axs[1],
-                 title=f"Sshape, chosen K = {best.n_components}")
+                 title=f"LASA Sshape, chosen K = {best.n_components}", unit="mm")
 St = np.column_stack([np.full(200, 2.4), np.linspace(-0.5, 0.5, 200)])
 axs[2].plot(S[:, 1], Y[:, 0], ".", color="0.5", label="training shots")
 axs[2].plot(St[:, 1], gmr.predict(St)[:, 0], "-", label=f"GMR, K = {gmr.best_params_['n_components']}")

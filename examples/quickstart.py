@@ -30,6 +30,7 @@ print(model, model.fit_info["status"], f"{model.fit_info['seconds']:.2f} s")
 starts = [p[0] for p in demos.positions]
 paths = model.rollout(starts, dt=0.05, tol=1.0)
 fig, ax = plt.subplots(figsize=(5, 4.5))
-plot_streamlines(model, demos, paths, ax=ax, title="CShape, SEDS direction objective")
+plot_streamlines(model, demos, paths, ax=ax, title="LASA CShape, SEDS direction objective",
+                 unit="mm")
 fig.savefig(args.out, dpi=110, bbox_inches="tight")
 print(f"wrote {args.out}")

@@ -392,12 +392,19 @@ def plot_field(field, ax=None, paths=None, sunk=None, ball=None, hole=None, n: i
     b = field.bounds
     X, Y = np.meshgrid(np.linspace(b[0], b[1], n), np.linspace(b[2], b[3], max(20, n // 3)))
     Z = field.surface.height(np.column_stack([X.ravel(), Y.ravel()])).reshape(X.shape)
-    im = ax.contourf(X, Y, Z * 100, levels=20, cmap="terrain")
-    plt.colorbar(im, ax=ax, label="surface height [cm]", shrink=0.8)
+    if np.ptp(Z) > 1e-6:   # a height map; a flat field is one colour, said in the key
+        im = ax.contourf(X, Y, Z * 100, levels=20, cmap="terrain")
+        plt.colorbar(im, ax=ax, label="surface height [cm]", shrink=0.8)
+        flat = []
+    else:
+        ax.set_facecolor("#b8dcb0")
+        flat = [plt.Line2D([], [], ls="", marker="s", ms=9, color="#b8dcb0",
+                           label=f"flat surface (z = {float(Z.mean()) * 100:.3g} cm)")]
     holes = np.atleast_2d(field.hole if hole is None else hole)
     for h in holes:
         ax.add_patch(plt.Circle(h, field.hole_radius, color="k", fill=False, lw=1.2))
-    key = [Line2D([], [], color="k", marker="o", mfc="none", ms=8, ls="", label="hole")]
+    key = flat + [Line2D([], [], color="k", marker="o", mfc="none", ms=8, ls="",
+                         label="hole")]
     for i, p in enumerate(paths or []):
         ok = bool(sunk[i]) if sunk is not None else True
         ax.plot(p[:, 0], p[:, 1], "-", color="g" if ok else "r", lw=0.9, alpha=0.8)

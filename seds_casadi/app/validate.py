@@ -235,7 +235,7 @@ def _report_figure(fld, paths, path, robot: str = ""):
 
     plt = _plt()
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(14, 3.8), gridspec_kw={"width_ratios": [2.2, 1]})
-    plot_field(fld, ax=a1)
+    plot_field(fld, ax=a1, legend=False)
     for k, p in enumerate(paths):
         if p is None:
             continue
@@ -249,8 +249,12 @@ def _report_figure(fld, paths, path, robot: str = ""):
         if len(shot.head_speed):
             a2.plot(shot.head_speed[:, 0] - shot.contact_time, shot.head_speed[:, 1], ":",
                     color=c, lw=1.2)
-    a1.set_title(f"{fld.name}, the {robot}: ball paths of the fast model (solid) and exudyn "
-                 f"(dashed), one colour per shot", fontsize=9)
+    a1.set_title(f"{fld.name}, the {robot}: ball paths, one colour per shot", fontsize=9)
+    a1.legend(handles=[plt.Line2D([], [], color="k", lw=1, label="fast ball model"),
+                       plt.Line2D([], [], color="k", ls="--", lw=1, label="exudyn"),
+                       plt.Line2D([], [], color="k", marker="o", mfc="none", ms=8, ls="",
+                                  label="hole")], fontsize=7, loc="upper left",
+              framealpha=0.85)
     a2.legend(handles=[plt.Line2D([], [], color="k", lw=1, label="Pinocchio swing"),
                        plt.Line2D([], [], color="k", ls=":", lw=1.2, label="exudyn arm")],
               fontsize=7)
