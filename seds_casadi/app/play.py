@@ -462,7 +462,7 @@ def play(config: PlayConfig | None = None, **overrides) -> dict:
 def _write_outputs(cfg: PlayConfig, fld, learned: tuple, tasks: list[dict], rows: list[dict],
                    n_situations: int, times: dict, started: float | None = None) -> dict:
     """``shots.csv``, the figures, the replay and ``summary.txt`` (with every stage's time)."""
-    from .play_figures import play_figures
+    from .play_figures import play_figures, strategy_figure
 
     motion, data, fitted, strategies = learned
     atomic_csv(os.path.join(cfg.out, "shots.csv"), SHOT_COLUMNS,
@@ -471,7 +471,7 @@ def _write_outputs(cfg: PlayConfig, fld, learned: tuple, tasks: list[dict], rows
     _LOG.info("drawing the figures ...")
     play_figures(fld, motion, data, fitted, rows, cfg.learners, cfg.out, cfg.robot)
     if strategies is not None:
-        _strategy_figure(fld, strategies, rows, cfg.learners[0], cfg.out)
+        strategy_figure(fld, strategies, rows, cfg.learners[0], cfg.out)
     times["figures"] = time.perf_counter() - t
     if cfg.replay:
         from .replay import write_replay
@@ -488,20 +488,3 @@ def _write_outputs(cfg: PlayConfig, fld, learned: tuple, tasks: list[dict], rows
     _LOG.info("wrote %s, summary.txt, figures and models/ in %s",
               os.path.join(cfg.out, "shots.csv"), cfg.out)
     return rates
-
-
-def _strategy_figure(fld, strategies, rows, learner: str, out: str) -> None:
-    """``strategies.png``: Fig. 4a of the first situation played, its success regions coloured
-    by strategy, and each strategy's shot from there; the one ``learner`` chose marked."""
-    from .plotting import _plt, plot_strategies, save_figure
-
-    first = next(r for r in rows if r["method"] == learner)
-    ball = np.array([first["ball_x_m"], first["ball_y_m"]])
-    hole = np.array([first["hole_x_m"], first["hole_y_m"]])
-    fig, (a1, a2) = _plt().subplots(1, 2, figsize=(13, 4.6),
-                                     gridspec_kw={"width_ratios": [1, 1.4]})
-    plot_strategies(fld, strategies.stroke, strategies, ball, hole, a1, a2,
-                    chosen=first["strategy"])
-    a2.set_title(f"each strategy's centre shot from this ball; {learner} chose strategy "
-                 f"{first['strategy']} (thick)", fontsize=9)
-    save_figure(fig, os.path.join(out, "strategies.png"))

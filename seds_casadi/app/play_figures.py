@@ -9,7 +9,7 @@ import numpy as np
 
 from .plotting import _plt, plot_field, save_figure
 
-__all__ = ["play_figures"]
+__all__ = ["play_figures", "strategy_figure"]
 
 
 def play_figures(fld, motion, data, fitted: dict, rows: list[dict], learners, out: str,
@@ -113,3 +113,20 @@ def _parameters_figure(fld, data, fitted, out) -> None:
                  f"shots (training data)", fontsize=10)
     fig.tight_layout()
     save_figure(fig, os.path.join(out, "hitting_parameters.png"))
+
+
+def strategy_figure(fld, strategies, rows, learner: str, out: str) -> None:
+    """``strategies.png``: Fig. 4a of the first situation played, its success regions coloured
+    by strategy, and each strategy's shot from there; the one ``learner`` chose marked."""
+    from .plotting import plot_strategies
+
+    first = next(r for r in rows if r["method"] == learner)
+    ball = np.array([first["ball_x_m"], first["ball_y_m"]])
+    hole = np.array([first["hole_x_m"], first["hole_y_m"]])
+    fig, (a1, a2) = _plt().subplots(1, 2, figsize=(13, 4.6),
+                                     gridspec_kw={"width_ratios": [1, 1.4]})
+    plot_strategies(fld, strategies.stroke, strategies, ball, hole, a1, a2,
+                    chosen=first["strategy"])
+    a2.set_title(f"each strategy's centre shot from this ball; {learner} chose strategy "
+                 f"{first['strategy']} (thick)", fontsize=9)
+    save_figure(fig, os.path.join(out, "strategies.png"))
