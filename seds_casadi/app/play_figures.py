@@ -127,6 +127,7 @@ def strategy_figure(fld, strategies, rows, learner: str, out: str) -> None:
                                      gridspec_kw={"width_ratios": [1, 1.4]})
     plot_strategies(fld, strategies.stroke, strategies, ball, hole, a1, a2,
                     chosen=first["strategy"])
-    a2.set_title(f"each strategy's centre shot from this ball; {learner} chose strategy "
+    a2.set_title(f"{fld.name}: each strategy's centre shot from this ball; {learner} chose "
+                 f"strategy "
                  f"{first['strategy']} (thick)", fontsize=9)
     save_figure(fig, os.path.join(out, "strategies.png"))
