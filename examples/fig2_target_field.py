@@ -2,10 +2,11 @@
 
 Both have exactly the same streamlines, but h keeps unit speed up to the target (colour: speed).
 
-python examples/fig2_target_field.py [--out fig2.png] [--quick]
+python examples/fig2_target_field.py [--out examples_out/fig2.png] [--quick]
 """
 
 import argparse
+import os
 
 import matplotlib
 
@@ -18,9 +19,11 @@ from seds_casadi.core.datasets import load_lasa
 from seds_casadi.motion.hitting import TargetField
 
 ap = argparse.ArgumentParser()
-ap.add_argument("--out", default="fig2.png")
+ap.add_argument("--out", default="examples_out/fig2.png",
+                help="the figure's file; its folder is made [examples_out/fig2.png]")
 ap.add_argument("--quick", action="store_true", help="smaller data for CI")
 args = ap.parse_args()
+os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
 
 demos = load_lasa("Angle", n_samples=30 if args.quick else 100)
 ds = SEDS(n_components=2, objective="direction", random_state=0).fit(demos).model_
@@ -35,11 +38,17 @@ for ax, (name, F) in zip(axes, (("SEDS model f(x)", ds.predict(G)), ("target fie
     speed = np.linalg.norm(F, axis=1).reshape(gx.shape)
     ax.streamplot(gx, gy, F[:, 0].reshape(gx.shape), F[:, 1].reshape(gx.shape), color=speed,
                   cmap="viridis", density=1.3, linewidth=0.8)
-    for p in demos.positions:
-        ax.plot(p[:, 0], p[:, 1], ".", color="tab:red", ms=2)
-    ax.plot(*ds.target, "k*", ms=12)
-    ax.set_title(f"{name}: speed {speed.min():.2g} .. {speed.max():.2g}", fontsize=9)
+    for k, p in enumerate(demos.positions):
+        ax.plot(p[:, 0], p[:, 1], ".", color="tab:red", ms=2,
+                label="LASA Angle demonstrations" if k == 0 else None)
+    ax.plot(*ds.target, "k*", ms=12, ls="", label="target")
+    unit = "mm/s" if name.startswith("SEDS") else "dimensionless"
+    ax.set_title(f"{name}: speed {speed.min():.2g} .. {speed.max():.2g} ({unit}; colour)",
+                 fontsize=9)
     ax.set_aspect("equal")
+    ax.set_xlabel("x1 [mm]")
+    ax.set_ylabel("x2 [mm]")
+    ax.legend(fontsize=7, loc="lower left")
 fig.suptitle("Fig. 2: SEDS streamlines vs the target field (same streamlines, unit speed)")
 fig.savefig(args.out, dpi=110, bbox_inches="tight")
 print(f"wrote {args.out}")

@@ -3,10 +3,11 @@
 The default motion (alpha = 0) and two rotated ones, each from several starts; arrows show the
 commanded hitting direction R_alpha psi*.
 
-python examples/fig3_rotated_hits.py [--out fig3.png] [--quick]
+python examples/fig3_rotated_hits.py [--out examples_out/fig3.png] [--quick]
 """
 
 import argparse
+import os
 
 import matplotlib
 
@@ -17,9 +18,11 @@ import numpy as np  # noqa: E402
 from seds_casadi.motion import HittingMotion, load_hitting_demos, rotation_z
 
 ap = argparse.ArgumentParser()
-ap.add_argument("--out", default="fig3.png")
+ap.add_argument("--out", default="examples_out/fig3.png",
+                help="the figure's file; its folder is made [examples_out/fig3.png]")
 ap.add_argument("--quick", action="store_true", help="fewer starts for CI")
 args = ap.parse_args()
+os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
 
 demos = load_hitting_demos()
 motion = HittingMotion.fit(demos)

@@ -7,11 +7,12 @@ teacher's situations explored, clustered into strategies consistent across situa
 Several separated regions are the different strategies; the teacher keeps the one with the
 slowest hits (the paper's choice for arctan, "the lower of the three green fields").
 
-python examples/fig4a_success_map.py [--out fig4a.png] [--field arctan] [--strategies 3]
+python examples/fig4a_success_map.py [--out examples_out/fig4a.png] [--field arctan] [--strategies 3]
                                      [--quick]
 """
 
 import argparse
+import os
 
 import matplotlib
 
@@ -28,11 +29,13 @@ from seds_casadi.motion.hitting import HittingMotion
 from seds_casadi.motion.putting_demos import load_hitting_demos
 
 ap = argparse.ArgumentParser()
-ap.add_argument("--out", default="fig4a.png")
+ap.add_argument("--out", default="examples_out/fig4a.png",
+                help="the figure's file; its folder is made [examples_out/fig4a.png]")
 ap.add_argument("--field", default="arctan", help="field name or .json file [arctan]")
 ap.add_argument("--strategies", default="3", help="'auto' or the number of strategies [3]")
 ap.add_argument("--quick", action="store_true", help="a coarser grid for CI")
 args = ap.parse_args()
+os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
 
 field = load_field(args.field)
 stroke = Stroke.from_motion(HittingMotion.fit(load_hitting_demos()))
@@ -54,8 +57,8 @@ strategies = explore(field, stroke, balls, holes,
 print(f"{strategies.settings['found']} strategies found over {len(balls)} situations, "
       f"{len(strategies)} kept:\n{strategies.describe()}")
 
-fig = plt.figure(figsize=(13, 9.6))
-grid = fig.add_gridspec(2, 2, width_ratios=[1, 1.4], height_ratios=[1, 1.25])
+fig = plt.figure(figsize=(15, 9.6))
+grid = fig.add_gridspec(2, 2, width_ratios=[1, 1.7], height_ratios=[1, 1.25])
 a1 = fig.add_subplot(grid[0, 0])
 plot_success_map(M, alphas, kappas, ax=a1, chosen=(alpha, kappa),
                  title=f"Fig. 4a: {field.name}, ball at {ball.tolist()}, direct shots")
@@ -69,7 +72,8 @@ res = simulate_shots(field, np.tile(ball, (len(A), 1)), stroke.launch_velocity(A
                      record_paths=True, engine="numpy")
 a2 = fig.add_subplot(grid[0, 1])
 plot_field(field, ax=a2, paths=res.paths, sunk=res.sunk, ball=ball, hole=hole)
-a2.set_title("direct hits from the map (green: sunk, red: missed)", fontsize=9)
+a2.set_title(f"{field.name}: direct hits from the map, the teacher's among them",
+             fontsize=9)
 plot_strategies(field, stroke, strategies, ball, hole, fig.add_subplot(grid[1, 0]),
                 fig.add_subplot(grid[1, 1]), chosen=0,
                 resolution=(151, 37) if args.quick else None)

@@ -1,10 +1,11 @@
 """Paper Fig. 6 (c)-(f): reproductions of the hitting motion against the demonstrations, and the
 velocity profiles along x, y and z.
 
-python examples/fig6_reproductions.py [--out fig6.png] [--quick]
+python examples/fig6_reproductions.py [--out examples_out/fig6.png] [--quick]
 """
 
 import argparse
+import os
 
 import matplotlib
 
@@ -15,9 +16,11 @@ import numpy as np  # noqa: E402
 from seds_casadi.motion import HittingMotion, load_hitting_demos
 
 ap = argparse.ArgumentParser()
-ap.add_argument("--out", default="fig6.png")
+ap.add_argument("--out", default="examples_out/fig6.png",
+                help="the figure's file; its folder is made [examples_out/fig6.png]")
 ap.add_argument("--quick", action="store_true", help="fewer demonstrations for CI")
 args = ap.parse_args()
+os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
 
 demos = load_hitting_demos()
 motion = HittingMotion.fit(demos)
@@ -37,10 +40,19 @@ for p, v in list(zip(demos.positions, demos.velocities))[:n]:
         ax.plot(t_demo, v[:, j], ".", color="tab:red", ms=3)
         ax.plot(t_rep, r.velocities[swing, j], "-", color="tab:blue", lw=1)
 ax3.plot([0], [0], [0], "ko")
-ax3.set_title("(c) reproductions (blue) vs demonstrations (red)", fontsize=9)
+ax3.set(xlabel="x [m]", ylabel="y [m]", zlabel="z [m]")
+ax3.set_title("(c) club-head paths relative to the ball (black): reproductions (blue),\n"
+              "demonstrations (red)", fontsize=9)
+key = [plt.Line2D([], [], ls="", marker=".", color="tab:red", label="demonstrations (20 Hz)"),
+       plt.Line2D([], [], color="tab:blue", label="reproductions (the learned motion)")]
 for j, (ax, name) in enumerate(zip(axes, "xyz")):
-    ax.set_title(f"({'def'[j]}) velocity along {name} [m/s]", fontsize=9)
+    ax.set_title(f"({'def'[j]}) club-head velocity along {name}", fontsize=9)
     ax.set_xlabel("time to the hit [s]")
+    ax.set_ylabel(f"velocity {name} [m/s]")
+    ax.grid(alpha=0.3)
+axes[0].legend(handles=key, fontsize=8, loc="upper left")
+fig.suptitle("Fig. 6: the hitting motion learned from the shipped putting demonstrations",
+             fontsize=10)
 fig.tight_layout()
 fig.savefig(args.out, dpi=110, bbox_inches="tight")
 print(f"wrote {args.out}")

@@ -6,10 +6,11 @@ moved sideways (Fig. 7a, hole fixed) and for three hole positions (Fig. 7b, ball
 aimed straight at the hole; the table printed gives the direction and speed errors at impact
 against the commanded hitting velocity and the peak torque ratio.
 
-python examples/fig7_robot_swings.py [--out fig7.png] [--quick]
+python examples/fig7_robot_swings.py [--out examples_out/fig7.png] [--quick]
 """
 
 import argparse
+import os
 
 import matplotlib
 
@@ -22,15 +23,17 @@ from seds_casadi.motion import HittingMotion, load_hitting_demos
 from seds_casadi.robots import default_base, load_robot, simulate_swing
 
 ap = argparse.ArgumentParser()
-ap.add_argument("--out", default="fig7.png")
+ap.add_argument("--out", default="examples_out/fig7.png",
+                help="the figure's file; its folder is made [examples_out/fig7.png]")
 ap.add_argument("--quick", action="store_true", help="fewer cases for CI")
 args = ap.parse_args()
+os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
 
 motion = HittingMotion.fit(load_hitting_demos(), n_components=3)
 HOLE_X = 2.4
 offsets = [0.0, -0.18] if args.quick else [0.0, -0.06, -0.12, -0.18]
 holes = [-0.3, 0.3] if args.quick else [-0.3, 0.0, 0.3]
-fig = plt.figure(figsize=(12, 11))
+fig = plt.figure(figsize=(13, 13))
 print(f"{'robot':<7} {'case':<22} {'alpha deg':>9} {'dir err deg':>11} {'face err deg':>12} "
       f"{'speed err':>9} {'peak tau':>8}")
 for col, (name, kappa) in enumerate((("wam", 1.0), ("katana", 0.4))):
@@ -58,8 +61,15 @@ for col, (name, kappa) in enumerate((("wam", 1.0), ("katana", 0.4))):
                 k = np.linspace(0, len(res.t) - 1, 7).astype(int)
                 plot_arm_frames(robot, res.q[k], ax=ax3d, ball=ball)
                 ax3d.set_title(f"Fig. 6g: the {name}'s swing (later frames darker)", fontsize=9)
-        ax.set_aspect("equal")
-        ax.set_title(f"{name}: Fig. {fig7}", fontsize=9)
-        ax.legend(fontsize=6)
+        ax.set_aspect("equal", adjustable="datalim")   # to scale, filling the panel
+        ax.grid(alpha=0.3)
+        ax.set_xlabel("club head x [m] (ball at x = 0, hole ahead)")
+        ax.set_ylabel("club head y [m]")
+        what = ("the ball moved sideways, the hole fixed" if fig7 == "7a"
+                else "three hole positions, the ball fixed")
+        ax.set_title(f"Fig. {fig7}, the {name}: club-head paths from above, {what}",
+                     fontsize=9)
+        ax.legend(fontsize=7, title="white dots: balls", title_fontsize=7)
+fig.tight_layout()
 fig.savefig(args.out, dpi=110, bbox_inches="tight")
 print(f"wrote {args.out}")

@@ -7,10 +7,11 @@ printed gives the direction error at impact against the (moved) commanded direct
 pushed late (8 cm before the club reaches it) cannot be hit along the new direction: the club
 turns sharply and arrives tens of degrees off, as a human player's would.
 
-python examples/fig8_perturbations.py [--out fig8.png] [--quick]
+python examples/fig8_perturbations.py [--out examples_out/fig8.png] [--quick]
 """
 
 import argparse
+import os
 
 import matplotlib
 
@@ -22,9 +23,11 @@ from seds_casadi.motion import HittingMotion, load_hitting_demos
 from seds_casadi.robots import default_base, load_robot, simulate_swing
 
 ap = argparse.ArgumentParser()
-ap.add_argument("--out", default="fig8.png")
+ap.add_argument("--out", default="examples_out/fig8.png",
+                help="the figure's file; its folder is made [examples_out/fig8.png]")
 ap.add_argument("--quick", action="store_true", help="fewer pushes for CI")
 args = ap.parse_args()
+os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
 
 motion = HittingMotion.fit(load_hitting_demos(), n_components=3)
 robot = load_robot("wam", base=default_base("wam"))
@@ -54,14 +57,16 @@ for ax, what in ((a1, "ball"), (a2, "hole")):
         d = res.commanded
         print(f"{what:<6} {t:8.2f} {str(res.hit):>4} {res.direction_error_deg:11.2f} "
               f"{np.degrees(np.arctan2(d[1], d[0])):13.2f}")
-    ax.plot(0, 0, "o", color="w", mec="k", ms=8)
+    ax.plot(0, 0, "o", color="w", mec="k", ms=8, ls="", label="ball")
     if what == "ball":
-        ax.plot(0, -0.05, "o", color="0.7", mec="k", ms=8)
+        ax.plot(0, -0.05, "o", color="0.7", mec="k", ms=8, ls="", label="ball after the push")
     ax.set_xlim(-0.35, 0.2)
     ax.legend(fontsize=7, loc="lower left" if what == "ball" else "upper right")
     ax.set_title(f"Fig. 8{'a' if what == 'ball' else 'b'}: the {what} pushed along -y "
                  f"({'5 cm' if what == 'ball' else '0.3 m'})", fontsize=9)
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
+    ax.set_xlabel("club head x [m] (the hole 2.4 m ahead)")
+    ax.set_ylabel("club head y [m]")
+fig.suptitle("Fig. 8: the WAM's club-head paths from above when the situation changes during "
+             "the swing (no re-planning)", fontsize=10)
 fig.savefig(args.out, dpi=110, bbox_inches="tight")
 print(f"wrote {args.out}")

@@ -9,7 +9,7 @@ demonstrated joint velocities) and whether every reproduction reaches q*; draws 
 joint angles over time (demonstrations dashed, reproductions solid) and the club head's path of
 each reproduction (forward kinematics) beside the Cartesian demonstrations.
 
-python examples/joint_space_seds.py [-K 3] [--out joint_space_seds.png] [--quick]
+python examples/joint_space_seds.py [-K 3] [--out examples_out/joint_space_seds.png] [--quick]
 """
 
 import argparse
@@ -31,7 +31,8 @@ from seds_casadi.robots.joint_space import joint_space_demos  # noqa: E402
 
 ap = argparse.ArgumentParser()
 ap.add_argument("-K", type=int, default=3, help="Gaussians [3]")
-ap.add_argument("--out", default="joint_space_seds.png", help="the figure [joint_space_seds.png]")
+ap.add_argument("--out", default="examples_out/joint_space_seds.png",
+                help="the figure's file; its folder is made [examples_out/joint_space_seds.png]")
 ap.add_argument("--quick", action="store_true", help="K = 2 (for CI)")
 args = ap.parse_args()
 if args.quick:

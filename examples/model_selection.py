@@ -2,10 +2,11 @@
 for the hitting-parameter GMR; the figure shows the cross-validated R^2 against K and the
 streamlines of the chosen SEDS model.
 
-python examples/model_selection.py [--out model_selection.png] [--quick]
+python examples/model_selection.py [--out examples_out/model_selection.png] [--quick]
 """
 
 import argparse
+import os
 import warnings
 
 import matplotlib
@@ -21,9 +22,11 @@ from seds_casadi.core.datasets import load_lasa  # noqa: E402
 from seds_casadi.minigolf.parameters import GMRModel  # noqa: E402
 
 ap = argparse.ArgumentParser()
-ap.add_argument("--out", default="model_selection.png")
+ap.add_argument("--out", default="examples_out/model_selection.png",
+                help="the figure's file; its folder is made [examples_out/model_selection.png]")
 ap.add_argument("--quick", action="store_true", help="smaller data for CI")
 args = ap.parse_args()
+os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
 
 # SEDS: samples of 7 LASA demonstrations; a fold holds out whole demonstrations
 demos = load_lasa("Sshape", n_samples=25 if args.quick else 60)
@@ -58,7 +61,7 @@ axs[0].set_title("GridSearchCV over K")
 axs[0].legend()
 starts = [p[0] for p in demos.positions]
 plot_streamlines(best, demos, best.rollout(starts, dt=0.05, tol=1.0), ax=axs[1],
-                 title=f"Sshape, chosen K = {best.n_components}")
+                 title=f"LASA Sshape, chosen K = {best.n_components}", unit="mm")
 St = np.column_stack([np.full(200, 2.4), np.linspace(-0.5, 0.5, 200)])
 axs[2].plot(S[:, 1], Y[:, 0], ".", color="0.5", label="training shots")
 axs[2].plot(St[:, 1], gmr.predict(St)[:, 0], "-", label=f"GMR, K = {gmr.best_params_['n_components']}")

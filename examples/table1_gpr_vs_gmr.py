@@ -5,7 +5,7 @@ let the teacher collect good shots on each field, run the protocol, print the ta
 paper's numbers and draw Fig. 10 (GPR and GMR with 2-sigma bands on the double hill data) and
 Fig. 11 (the joint GMM on the arctan data).
 
-python examples/table1_gpr_vs_gmr.py [--out table1.png] [--repetitions 100] [--workers 2]
+python examples/table1_gpr_vs_gmr.py [--out examples_out/table1.png] [--repetitions 100] [--workers 2]
                                      [--quick]
 """
 
@@ -26,11 +26,13 @@ from seds_casadi.motion.hitting import HittingMotion
 from seds_casadi.motion.putting_demos import load_hitting_demos
 
 ap = argparse.ArgumentParser()
-ap.add_argument("--out", default="table1.png")
+ap.add_argument("--out", default="examples_out/table1.png",
+                help="the figure's file; its folder is made [examples_out/table1.png]")
 ap.add_argument("--repetitions", type=int, default=100)
 ap.add_argument("--workers", type=int, default=1)
 ap.add_argument("--quick", action="store_true", help="2 repetitions, coarse teacher (CI)")
 args = ap.parse_args()
+os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
 
 stroke = Stroke.from_motion(HittingMotion.fit(load_hitting_demos()))
 teacher = {"resolution": (81, 26)} if args.quick else {}

@@ -6,10 +6,11 @@ controller on Pinocchio (the ball launched by the club face as the arm holds it)
 success rates include the robot's execution errors, not only the learners'. RMSEs are on the
 teacher's data as in Table 1.
 
-python examples/table2_robot.py [--out table2.png] [--repetitions 5] [--tests 30] [--quick]
+python examples/table2_robot.py [--out examples_out/table2.png] [--repetitions 5] [--tests 30] [--quick]
 """
 
 import argparse
+import os
 
 import matplotlib
 
@@ -38,11 +39,13 @@ PAPER_TABLE2 = {
 }
 
 ap = argparse.ArgumentParser()
-ap.add_argument("--out", default="table2.png")
+ap.add_argument("--out", default="examples_out/table2.png",
+                help="the figure's file; its folder is made [examples_out/table2.png]")
 ap.add_argument("--repetitions", type=int, default=5)
 ap.add_argument("--tests", type=int, default=30, help="test situations per repetition")
 ap.add_argument("--quick", action="store_true", help="1 repetition, 4 tests, one field (CI)")
 args = ap.parse_args()
+os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
 reps, n_tests = (1, 4) if args.quick else (args.repetitions, args.tests)
 fields = ["double_hill"] if args.quick else ["rough_flat", "double_hill"]
 

@@ -24,7 +24,7 @@ def _run(*args, timeout=600):
 @pytest.fixture(scope="module")
 def quick_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("play") / "out"
-    r = _run("play", "--quick", "--out", str(out))
+    r = _run("play", "--quick", "--replay", "--out", str(out))
     assert r.returncode == 0, r.stderr[-3000:]
     return out, r
 
@@ -57,6 +57,11 @@ def test_play_quick_writes_shots_summary_figures_and_models(quick_run):
         assert (out / name).stat().st_size > 1000
     assert (out / "models" / "motion" / "stable_ds.npz").exists()
     assert (out / "models" / "dataset_arctan.npz").exists()
+    # --replay (N = 1): the page of the first learner's first shot and its GIF
+    page = (out / "replay.html").read_text(encoding="utf-8")
+    assert "gpr shot 0" in page and "arctan" in page
+    assert (out / "replay_gpr_0.gif").stat().st_size > 10000
+    assert not list(out.glob("replay_gmr_*.gif")) and "replay" in summary
 
 
 def test_play_reuses_saved_models(quick_run, tmp_path):

@@ -40,11 +40,26 @@ def build_parser() -> argparse.ArgumentParser:
                        help="print only warnings and errors: no progress messages or bars "
                             "(bars show only on a terminal anyway)")
     _add_fit(sub, quiet)
-    _add_lasa(sub)
+    _add_lasa(sub, quiet)
     _add_table1(sub, quiet)
     _add_validate(sub, quiet)
     _add_play(sub, quiet)
     return p
+
+
+def _robot_help() -> str:
+    try:
+        from ..robots.models import robot_names
+    except ImportError:  # a core-only install: no robots to list
+        return "a robot name (install the [robots] extra) [wam]"
+    return (f"a robot name: {', '.join(robot_names())} (the arms other than wam and katana "
+            f"come from example-robot-data) [wam]")
+
+
+def _field_help(default: str) -> str:
+    from ..minigolf.fields import field_names
+
+    return f"a field name ({', '.join(field_names())}) or a .json field file [{default}]"
 
 
 def _components(text: str) -> int | str:
@@ -70,13 +85,14 @@ def _add_fit(sub, quiet) -> None:
     f.add_argument("--objective", choices=OBJECTIVES, default="direction",
                    help="objective [direction]")
     f.add_argument("--dt", type=float, default=None,
-                   help="time step [s] if the file has neither velocities nor time stamps")
+                   help="time step [s] of the samples, needed only when the file has neither "
+                        "velocities nor time stamps [from the file]")
     f.add_argument("--seed", type=int, default=0, help="random seed of the initialisation [0]")
     f.add_argument("--max-iter", type=int, default=1000, help="IPOPT iteration limit [1000]")
     f.add_argument("--out", default="seds_out", help="output folder [seds_out]")
 
 
-def _add_lasa(sub) -> None:
+def _add_lasa(sub, quiet) -> None:
     from ..core.datasets import LASA_SHAPES
     from ..core.parametrization import OBJECTIVES
     from .lasa import DEFAULT_PROTOCOLS, PROTOCOLS
@@ -93,7 +109,7 @@ def _add_lasa(sub) -> None:
             raise argparse.ArgumentTypeError(f"K must be at least 1, got {k}")
         return k
 
-    la = sub.add_parser("lasa", help="run the LASA handwriting benchmark",
+    la = sub.add_parser("lasa", help="run the LASA handwriting benchmark", parents=[quiet],
                         description="Fit LASA shapes, score reproductions (RMSE, e_dot, DTW) "
                                     "and write lasa.csv (lasa_dsopt.csv for --protocol ds-opt), "
                                     "summary.txt and figures to --out.")
@@ -135,7 +151,9 @@ def _add_table1(sub, quiet) -> None:
                                    "shots on each field, and compare GPR and GMR for the "
                                    "hitting parameters as in the paper's Table 1.")
     t.add_argument("--field", nargs="+", default=list(TABLE1_FIELDS), metavar="FIELD",
-                   help="field names or .json field files [rough_flat double_hill arctan]")
+                   help=_field_help("rough_flat double_hill arctan").replace(
+                       "a field name", "field names").replace("a .json field file",
+                                                              ".json field files"))
     t.add_argument("--repetitions", type=int, default=100, help="repetitions [100]")
     t.add_argument("--seed", type=int, default=0, help="random seed [0]")
     t.add_argument("--workers", type=int, default=1, help="local worker processes [1]")
@@ -155,10 +173,14 @@ def _add_validate(sub, quiet) -> None:
                        description="Shots chosen by the learned hitting-parameter model and "
                                    "executed by the robot's controller, played on the fast ball "
                                    "model and in exudyn (ball on the field mesh with contact).")
-    v.add_argument("--robot", default="wam", help="robot name [wam]")
-    v.add_argument("--field", default="flat", help="field name or .json file [flat]")
+    v.add_argument("--robot", default="wam", help=_robot_help())
+    v.add_argument("--field", default="flat", help=_field_help("flat"))
     v.add_argument("--shots", type=int, default=10, help="number of shots [10]")
     v.add_argument("--seed", type=int, default=0, help="random seed [0]")
+    v.add_argument("--workers", type=int, default=1,
+                   help="local worker processes for the shots [1]")
+    v.add_argument("--quick", action="store_true",
+                   help="at most 3 shots and a coarser teacher: a check in about half a minute")
     v.add_argument("--out", default="validate_out", help="output folder [validate_out]")
 
 
@@ -169,8 +191,8 @@ def _add_play(sub, quiet) -> None:
                                     "good shots, learn the hitting parameters (GPR and GMR) and "
                                     "play a round of shots with the robot on the field's ball "
                                     "model, a few checked in exudyn.")
-    pl.add_argument("--robot", default="wam", help="robot name or .urdf [wam]")
-    pl.add_argument("--field", default="arctan", help="field name or .json file [arctan]")
+    pl.add_argument("--robot", default="wam", help=_robot_help())
+    pl.add_argument("--field", default="arctan", help=_field_help("arctan"))
     pl.add_argument("--demos", default=None, help="hitting demonstrations (.npz/.csv) [shipped]")
     pl.add_argument("--learner", nargs="+", default=["gpr", "gmr"],
                     choices=["gpr", "gmr", "sep_gmr"], help="hitting-parameter learners [gpr gmr]")
@@ -191,15 +213,23 @@ def _add_play(sub, quiet) -> None:
     pl.add_argument("--train-size", type=int, default=None, metavar="N",
                     help="train the learners on N equally spaced situations of the teacher's "
                          "data set (as Table 1's equally spaced rows) [all]")
+    pl.add_argument("--replay", type=int, nargs="?", const=1, default=0, metavar="N",
+                    help="replay the first learner's first N shots (N: 1 when left out): "
+                         "OUT/replay.html (a 3-D page that works offline) and a GIF per shot "
+                         "[no replay]")
+    pl.add_argument("--no-cache", action="store_true",
+                    help="teach again even when the teacher's data set for this field and "
+                         "motion is in the cache (~/.cache/seds_casadi/teacher)")
     pl.add_argument("--quick", action="store_true",
-                    help="3 situations, a coarse teacher, 1 exudyn check: under a minute")
+                    help="3 situations, a coarse teacher, 1 exudyn check (about 15 s after "
+                         "the first run's compilation)")
     pl.add_argument("--out", default="play_out", help="output folder [play_out]")
 
 
 def _cmd_fit(a) -> int:
     from ..core.demonstrations import load_demonstrations
     from ..core.seds import SEDS
-    from .plotting import _plt, plot_streamlines, save_figure
+    from .plotting import save_figure
 
     kw = {"dt": a.dt} if a.dt is not None else {}
     demos = load_demonstrations(a.demonstrations, **kw)
@@ -212,9 +242,10 @@ def _cmd_fit(a) -> int:
     starts = [p[0] for p in demos.positions]
     span = max(float(max(abs(p - demos.target).max() for p in demos.positions)), 1e-9)
     repro = model.rollout(starts, dt=demos.estimated_dt(), tol=1e-3 * span, max_steps=20000)
-    fig, ax = _plt().subplots(figsize=(5.5, 5))
-    plot_streamlines(model, demos, repro, ax=ax,
-                     title=f"SEDS ({a.objective}, K={model.n_components})")
+    from .plotting import plot_fit_views
+
+    fig = plot_fit_views(model, demos, repro, title=f"{os.path.basename(a.demonstrations)}: "
+                         f"SEDS ({a.objective}, K={model.n_components})")
     save_figure(fig, os.path.join(a.out, "streamlines.png"))
     info = {k: model.fit_info[k] for k in ("status", "iterations", "objective", "seconds")}
     print(json.dumps(info, indent=1))
@@ -236,7 +267,8 @@ def _cmd_lasa(a) -> int:
     results = run_lasa(shapes=shapes, objectives=objectives, protocols=protocols,
                        n_components=a.components, n_samples=a.samples, random_state=a.seed,
                        out_dir=a.out, figures=not a.no_figures, workers=a.workers,
-                       dask=a.dask, dsopt_objectives=dsopt_objectives, k_max=a.k_max)
+                       dask=a.dask, dsopt_objectives=dsopt_objectives, k_max=a.k_max,
+                       progress=not a.quiet)
     print(summary_table(results))
     names = (["lasa.csv"] if set(protocols) - {"ds-opt"} else []) + \
         (["lasa_dsopt.csv"] if "ds-opt" in protocols else []) + ["summary.txt"]
@@ -258,7 +290,7 @@ def _cmd_validate(a) -> int:
     from .validate import ValidateConfig, validate
 
     validate(ValidateConfig(robot=a.robot, field=a.field, shots=a.shots, out=a.out, seed=a.seed,
-                            progress=not a.quiet))
+                            quick=a.quick, workers=a.workers, progress=not a.quiet))
     return 0
 
 
@@ -268,7 +300,8 @@ def _cmd_play(a) -> int:
     play(PlayConfig(robot=a.robot, field=a.field, demos=a.demos, learners=tuple(a.learner),
                     shots=a.shots, seed=a.seed, out=a.out, models=a.models, quick=a.quick,
                     validate_shots=a.validate, workers=a.workers, dask=a.dask,
-                    train_size=a.train_size, strategies=a.strategies,
+                    train_size=a.train_size, strategies=a.strategies, replay=a.replay,
+                    cache=not a.no_cache,
                     progress=not a.quiet))
     return 0
 
@@ -287,7 +320,8 @@ class _PlainHandler(logging.Handler):
 
 
 @contextlib.contextmanager
-def command_logging(quiet: bool = False, names: tuple[str, ...] = ("seds_casadi.app",)
+def command_logging(quiet: bool = False,
+                    names: tuple[str, ...] = ("seds_casadi.app", "seds_casadi.progress")
                     ) -> Iterator[None]:
     """For the duration of a command: the named loggers (default the commands' own,
     ``seds_casadi.app.*``) print their messages plainly, progress (INFO) on stdout, or with
@@ -312,6 +346,7 @@ def command_logging(quiet: bool = False, names: tuple[str, ...] = ("seds_casadi.
 #: loggers whose progress a command shows: ``fit`` also shows the solver's progress lines and
 #: the compiler's ("compiling ..."), which a first fit in a new dimension can take a while on
 _COMMAND_LOGGERS = {"fit": ("seds_casadi.app", "seds_casadi.core", "seds_casadi.codegen")}
+_DEFAULT_LOGGERS = ("seds_casadi.app", "seds_casadi.progress")
 
 
 _COMMANDS = {"fit": _cmd_fit, "lasa": _cmd_lasa, "table1": _cmd_table1,
@@ -332,7 +367,7 @@ def main(argv: list[str] | None = None) -> int:
     warnings.simplefilter("always", ConvergenceWarning)
     try:
         with command_logging(quiet=getattr(a, "quiet", False),
-                             names=_COMMAND_LOGGERS.get(a.command, ("seds_casadi.app",))):
+                             names=_COMMAND_LOGGERS.get(a.command, _DEFAULT_LOGGERS)):
             return _COMMANDS[a.command](a)
     except (ValueError, TypeError, FileNotFoundError, SEDSError) as exc:
         print(f"seds-casadi {a.command}: error: {exc}", file=sys.stderr)

@@ -81,7 +81,11 @@ PROTOCOLS = ("all", "split", "ds-opt")
 #: what :func:`run_lasa` and ``seds-casadi lasa`` run unless told otherwise
 DEFAULT_PROTOCOLS = ("all", "split")
 _CONVERGED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
-CSV_COLUMNS = ("shape", "objective", "protocol", "rmse", "e_dot", "dtwd", "seconds", "iterations")
+#: columns of ``lasa.csv``; a unit ends the name (the LASA data are in mm): the velocity RMSE
+#: [mm/s], the DTW distance [mm], the fit's time [s]; e_dot (in [0, 2]) and iterations have none
+CSV_COLUMNS = ("shape", "objective", "protocol", "rmse_mmps", "e_dot", "dtwd_mm", "seconds",
+               "iterations")
+_CSV_FIELDS = {"rmse_mmps": "rmse", "dtwd_mm": "dtwd"}   # column -> LasaResult's attribute
 DSOPT_COLUMNS = ("shape", "objective", "set", "rmse_mmps", "e_dot", "dtwd_mm", "seconds",
                  "iterations", "n_components", "certified", "status", "k_choice", "seconds_k",
                  "repro_points", "max_end_distance_mm", "max_rate_per_s",
@@ -340,7 +344,7 @@ def evaluate_shape_dsopt(shape: str, objective: str = "mse", n_components: int |
         fig, ax = _plt().subplots(figsize=(5, 4.5))
         plot_streamlines(model, test.demonstrations(),
                          [paths["test"][:, n] for n in range(len(test.demos))], ax=ax,
-                         title=f"{shape} · {objective} · ds-opt test · K={K}")
+                         title=f"{shape} · {objective} · ds-opt test · K={K}", unit="mm")
         save_figure(fig, figure_path)
     return rows
 
@@ -401,7 +405,7 @@ def evaluate_shape(shape: str, objective: str = "direction", protocol: str = "al
         from .plotting import _plt, plot_streamlines, save_figure
 
         fig, ax = _plt().subplots(figsize=(5, 4.5))
-        plot_streamlines(model, test, repro, ax=ax,
+        plot_streamlines(model, test, repro, ax=ax, unit="mm",
                          title=f"{shape} · {objective} · {protocol} · K={n_components}")
         save_figure(fig, figure_path)
     return LasaResult(shape, objective, protocol, velocity_rmse(F, V), direction_error(F, V),
@@ -517,9 +521,9 @@ def run_lasa(shapes=None, objectives=None, protocols=DEFAULT_PROTOCOLS,
             tasks.append(dict(shape=s, objective=o, protocol="ds-opt", n_components=d_k,
                               k_max=int(k_max), random_state=random_state, bic_rule=bic_rule,
                               figure_path=fp))
-    from tqdm.auto import tqdm
+    from ..minigolf._progress import progress_bar
 
-    bar = tqdm(total=len(tasks), desc="LASA fits", unit="fit", disable=not progress)
+    bar = progress_bar(None, progress, total=len(tasks), desc="LASA fits", unit="fit")
     results: list[LasaResult | DsOptResult] = []
     from .executors import open_executor
 
@@ -549,9 +553,11 @@ def run_lasa(shapes=None, objectives=None, protocols=DEFAULT_PROTOCOLS,
 
 
 def write_csv(results: list[LasaResult], path: str) -> None:
-    """Write results with the columns ``shape, objective, protocol, rmse, e_dot, dtwd, seconds,
-    iterations`` (atomically: a partial file is never left under the final name)."""
-    atomic_csv(path, CSV_COLUMNS, ([asdict(r)[c] for c in CSV_COLUMNS] for r in results))
+    """Write results with the columns :data:`CSV_COLUMNS` (``shape, objective, protocol,
+    rmse_mmps, e_dot, dtwd_mm, seconds, iterations``; atomically: a partial file is never left
+    under the final name)."""
+    atomic_csv(path, CSV_COLUMNS, ([asdict(r)[_CSV_FIELDS.get(c, c)] for c in CSV_COLUMNS]
+                                   for r in results))
 
 
 def summary_table(results: list[LasaResult | DsOptResult]) -> str:

@@ -92,6 +92,12 @@ class PlayConfig:
         Address of a Dask scheduler (overrides ``workers``).
     progress : bool
         Progress bars (on stderr, only on a terminal).
+    cache : bool
+        Take the teacher's data set from the cache when the same field, motion and teacher
+        settings were taught before (:mod:`seds_casadi.app.teacher_cache`).
+    replay : int
+        Replay the first learner's first ``replay`` shots (:mod:`seds_casadi.app.replay`):
+        ``replay.html`` and a GIF per shot in ``out`` (0: none).
     """
 
     robot: str = "wam"
@@ -109,8 +115,11 @@ class PlayConfig:
     progress: bool = True
     train_size: int | None = None
     strategies: str | int | None = None
+    replay: int = 0
+    cache: bool = True
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "replay", whole_number("replay", self.replay, 0))
         object.__setattr__(self, "learners", names_tuple("learner", self.learners,
                                                          _VALID_LEARNERS))
         object.__setattr__(self, "shots", whole_number("shots", self.shots, 1))
@@ -183,6 +192,8 @@ def play_shot(task: dict) -> dict:
         row["error"] = str(exc)
         return row
     if not swing.hit:
+        if task.get("keep_swing"):
+            row["swing"] = swing
         return row
     launch = impact(swing.hit_velocity[None], face_normal=swing.face_normal[None],
                     club_mass=swing.effective_mass)
@@ -191,6 +202,8 @@ def play_shot(task: dict) -> dict:
                direction_error_deg=swing.direction_error_deg, speed_error=swing.speed_error,
                final_x_m=float(res.final_position[0, 0]),
                final_y_m=float(res.final_position[0, 1]), path=res.paths[0])
+    if task.get("keep_swing"):  # for a replay (seds_casadi.app.replay)
+        row["swing"] = swing
     return row
 
 
@@ -230,11 +243,13 @@ def _reuse_models(models: str, fld, strategies=None):
 def _learn_and_teach(cfg: PlayConfig, fld, times: dict):
     """Steps 1-2: the hitting motion from the demonstrations, the teacher's good shots."""
     from ..core.demonstrations import load_demonstrations
-    from ..minigolf.teacher import Stroke, collect_dataset, paper_situations
+    from ..minigolf.teacher import Stroke, paper_situations
     from ..motion.hitting import HittingMotion
     from ..motion.putting_demos import load_hitting_demos
+    from .teacher_cache import cached_dataset
 
     t0 = time.perf_counter()
+    _LOG.info("learning the hitting motion (SEDS + GMR) ...")
     d = load_demonstrations(cfg.demos) if cfg.demos else load_hitting_demos()
     motion = HittingMotion.fit(d, n_components=3)
     times["hitting motion (SEDS + GMR)"] = time.perf_counter() - t0
@@ -259,10 +274,12 @@ def _learn_and_teach(cfg: PlayConfig, fld, times: dict):
         _LOG.info("%d strategies on %s (of %d found; %.1f s):\n%s", len(ss), fld.name,
                   ss.settings["found"], times["exploring strategies"], ss.describe())
         return motion, ss.dataset(), ss
-    data = collect_dataset(fld, stroke, progress=cfg.progress,
-                           **({"resolution": (81, 26)} if cfg.quick else {}))
-    times["teacher"] = time.perf_counter() - t1
-    _LOG.info("teacher: %d good shots on %s (%.1f s)", len(data), fld.name, times["teacher"])
+    _LOG.info("teacher: looking for good shots on %s ...", fld.name)
+    data, cached = cached_dataset(fld, stroke, cfg.cache, progress=cfg.progress,
+                                  **({"resolution": (81, 26)} if cfg.quick else {}))
+    times["teacher" + (" (cached)" if cached else "")] = dt = time.perf_counter() - t1
+    _LOG.info("teacher: %d good shots on %s (%.1f s%s)", len(data), fld.name, dt,
+              ", from the cache: --no-cache computes them again" if cached else "")
     fast = int(np.sum(data.kappa > fastest))
     if fast:
         _LOG.warning("%d of the teacher's %d shots on %s need kappa above %.2f, faster than the "
@@ -332,6 +349,7 @@ def _play_round(cfg: PlayConfig, tasks: list[dict]) -> list[dict]:
     """Step 4: the tasks on this process, local workers or Dask; rows in the tasks' order."""
     from .executors import open_executor
 
+    _LOG.info("playing %d shots ...", len(tasks))
     with open_executor(cfg.workers, cfg.dask) as ex:
         futures = [ex.submit(play_shot, t) for t in tasks]
         it = progress_bar(futures, cfg.progress, desc=f"playing {len(tasks)} shots",
@@ -345,7 +363,9 @@ def _check_in_exudyn(cfg: PlayConfig, fld, motion, tasks: list[dict], rows: list
     from ..sim.shot import simulate_shot_exudyn
 
     checked = [(t, r) for t, r in zip(tasks, rows) if r["method"] == cfg.learners[0] and r["hit"]]
-    for task, row in checked[:cfg.validate_shots]:
+    for i, (task, row) in enumerate(checked[:cfg.validate_shots]):
+        _LOG.info("  exudyn %d/%d: %s shot %d", i + 1, min(len(checked), cfg.validate_shots),
+                  task["method"], task["shot"])
         ball = np.asarray(task["ball"])
         ex_shot = simulate_shot_exudyn(fld, ball, hole=task["hole"], arm={
             "robot": place_robot(cfg.robot, ball, fld), "motion": motion,
@@ -353,7 +373,8 @@ def _check_in_exudyn(cfg: PlayConfig, fld, motion, tasks: list[dict], rows: list
         row["sunk_exudyn"] = bool(ex_shot.sunk)
 
 
-def _summary(cfg: PlayConfig, fld, rows: list[dict], n_situations: int, times: dict):
+def _summary(cfg: PlayConfig, fld, rows: list[dict], n_situations: int, times: dict,
+             started: float | None = None):
     """Success per learner, agreement with exudyn and the time per stage, as text."""
     rates = {m: float(np.mean([r["sunk"] for r in rows if r["method"] == m]))
              for m in cfg.learners}
@@ -372,6 +393,8 @@ def _summary(cfg: PlayConfig, fld, rows: list[dict], n_situations: int, times: d
                      f"{len(checked)} checked shots")
     lines.append("time per stage:")
     lines += [f"  {k}: {v:.1f} s" for k, v in times.items()]
+    if started is not None:
+        lines.append(f"  total (from the start of play): {time.perf_counter() - started:.1f} s")
     return rates, "\n".join(lines) + "\n"
 
 
@@ -394,6 +417,7 @@ def play(config: PlayConfig | None = None, **overrides) -> dict:
     from ..minigolf.fields import load_field
     from ..robots.models import load_robot, robot_names
 
+    started = time.perf_counter()
     cfg = with_overrides(PlayConfig, config, overrides).effective()
     if cfg.robot not in robot_names() and not str(cfg.robot).endswith(".urdf"):
         raise ValueError(f"unknown robot {cfg.robot!r}; known: {', '.join(robot_names())}")
@@ -412,7 +436,13 @@ def play(config: PlayConfig | None = None, **overrides) -> dict:
     if strategies is not None:
         strategies.save(os.path.join(cfg.out, "models", f"strategies_{fld.name}.npz"))
     t2 = time.perf_counter()
-    fitted = _fit_learners(data, cfg.learners, cfg.train_size, strategies)
+    _LOG.info("fitting the hitting-parameter models (%s) ...", ", ".join(cfg.learners))
+    from threadpoolctl import threadpool_limits
+
+    # one BLAS thread: on busy cores OpenBLAS's threads on these small matrices made GPR's
+    # fit 20x slower (7.5 s against 0.36 s for arctan's 56 shots on 2 loaded cores)
+    with threadpool_limits(1):
+        fitted = _fit_learners(data, cfg.learners, cfg.train_size, strategies)
     times["hitting-parameter models"] = time.perf_counter() - t2
     t3 = time.perf_counter()
     balls, holes = _situations(fld, cfg.shots, rng)
@@ -421,82 +451,40 @@ def play(config: PlayConfig | None = None, **overrides) -> dict:
     times["round (robot + ball model)"] = time.perf_counter() - t3
     if cfg.validate_shots > 0:
         t4 = time.perf_counter()
+        _LOG.info("checking %d shots again in exudyn ...", cfg.validate_shots)
         _check_in_exudyn(cfg, fld, motion, tasks, rows)
         times["exudyn validation"] = time.perf_counter() - t4
-    atomic_csv(os.path.join(cfg.out, "shots.csv"), SHOT_COLUMNS,
-               ([r[c] for c in SHOT_COLUMNS] for r in rows))
-    rates, text = _summary(cfg, fld, rows, len(balls), times)
-    atomic_text(os.path.join(cfg.out, "summary.txt"), text)
-    _figures(fld, motion, data, fitted, rows, cfg.learners, cfg.out)
-    if strategies is not None:
-        _strategy_figure(fld, strategies, rows, cfg.learners[0], cfg.out)
-    _LOG.info("%s", text.rstrip("\n"))
-    _LOG.info("wrote %s, summary.txt, figures and models/ in %s",
-              os.path.join(cfg.out, "shots.csv"), cfg.out)
+    rates = _write_outputs(cfg, fld, (motion, data, fitted, strategies), tasks, rows,
+                           len(balls), times, started)
     return {"success": rates, "times": times, "rows": rows}
 
 
-def _figures(fld, motion, data, fitted, rows, learners, out) -> None:
-    from ..motion.hitting import rotation_z
-    from .plotting import _plt, plot_field, save_figure
+def _write_outputs(cfg: PlayConfig, fld, learned: tuple, tasks: list[dict], rows: list[dict],
+                   n_situations: int, times: dict, started: float | None = None) -> dict:
+    """``shots.csv``, the figures, the replay and ``summary.txt`` (with every stage's time)."""
+    from .play_figures import play_figures, strategy_figure
 
-    plt = _plt()
-    fig, axs = plt.subplots(len(learners), 1, figsize=(9, 3.6 * len(learners)), squeeze=False)
-    for ax, m in zip(axs[:, 0], learners):
-        rs = [r for r in rows if r["method"] == m]
-        plot_field(fld, ax=ax, paths=[r["path"] for r in rs if "path" in r],
-                   sunk=[r["sunk"] for r in rs if "path" in r],
-                   ball=np.array([[r["ball_x_m"], r["ball_y_m"]] for r in rs]),
-                   hole=np.array([[r["hole_x_m"], r["hole_y_m"]] for r in rs]))
-        ax.set_title(f"{m}: {np.mean([r['sunk'] for r in rs]):.0%} sunk (green: sunk, red: "
-                     f"missed)", fontsize=9)
-    fig.tight_layout()
-    save_figure(fig, os.path.join(out, "shots.png"))
-    # the learned motion: swings from a few starts, turned by three angles, seen from above
-    fig, ax = plt.subplots(figsize=(6, 5))
-    for alpha, c in ((0.0, "k"), (0.3, "tab:blue"), (-0.3, "tab:orange")):
-        for y in (-0.1, 0.0, 0.1):
-            r = motion.rollout(rotation_z(alpha) @ np.array([-0.3, y, 0.05]), alpha=alpha,
-                               rest_time=0.1, dt=0.004)
-            ax.plot(r.positions[:, 0], r.positions[:, 1], "-", color=c, lw=1)
-    ax.plot(0, 0, "o", color="w", mec="k", ms=9)
-    ax.set_aspect("equal")
-    ax.set_title("the learned hitting motion (Eq. 14) for alpha = 0, +-0.3 rad", fontsize=9)
-    save_figure(fig, os.path.join(out, "motion.png"))
-    # the hitting-parameter models against the teacher's data (each strategy's own model)
-    from ..minigolf.strategy_choice import StrategyChoice
+    motion, data, fitted, strategies = learned
+    atomic_csv(os.path.join(cfg.out, "shots.csv"), SHOT_COLUMNS,
+               ([r[c] for c in SHOT_COLUMNS] for r in rows))
+    t = time.perf_counter()
+    _LOG.info("drawing the figures ...")
+    play_figures(fld, motion, data, fitted, rows, cfg.learners, cfg.out, cfg.robot)
+    if strategies is not None:
+        strategy_figure(fld, strategies, rows, cfg.learners[0], cfg.out)
+    times["figures"] = time.perf_counter() - t
+    if cfg.replay:
+        from .replay import write_replay
 
-    fig, ax = plt.subplots(figsize=(6, 4.5))
-    y = data.outputs[:, 0]
-    for m, model in fitted.items():
-        if isinstance(model, StrategyChoice):
-            pred = np.empty(len(y))
-            for k in np.unique(data.labels):
-                sel = data.labels == k
-                pred[sel] = model.predict_strategy(data.situations[sel], int(k))[:, 0]
-        else:
-            pred = model.predict(data.situations)[:, 0]
-        ax.plot(y, pred, "o", ms=4, label=m)
-    ax.plot([y.min(), y.max()], [y.min(), y.max()], "k-", lw=0.8)
-    ax.set_xlabel("teacher's hitting angle [deg]")
-    ax.set_ylabel("model's hitting angle [deg]")
-    ax.legend(fontsize=8)
-    ax.set_title("hitting-parameter models on the teacher's data", fontsize=9)
-    save_figure(fig, os.path.join(out, "hitting_parameters.png"))
-
-
-def _strategy_figure(fld, strategies, rows, learner: str, out: str) -> None:
-    """``strategies.png``: Fig. 4a of the first situation played, its success regions coloured
-    by strategy, and each strategy's shot from there; the one ``learner`` chose marked."""
-    from .plotting import _plt, plot_strategies, save_figure
-
-    first = next(r for r in rows if r["method"] == learner)
-    ball = np.array([first["ball_x_m"], first["ball_y_m"]])
-    hole = np.array([first["hole_x_m"], first["hole_y_m"]])
-    fig, (a1, a2) = _plt().subplots(1, 2, figsize=(13, 4.6),
-                                     gridspec_kw={"width_ratios": [1, 1.4]})
-    plot_strategies(fld, strategies.stroke, strategies, ball, hole, a1, a2,
-                    chosen=first["strategy"])
-    a2.set_title(f"each strategy's centre shot from this ball; {learner} chose strategy "
-                 f"{first['strategy']} (thick)", fontsize=9)
-    save_figure(fig, os.path.join(out, "strategies.png"))
+        t = time.perf_counter()
+        mine = [t for t in tasks if t["method"] == cfg.learners[0]][:cfg.replay]
+        write_replay(mine, cfg.out, progress=_LOG.info)
+        times["replay"] = time.perf_counter() - t
+        _LOG.info("wrote the replay of %d shots: %s and GIFs (%.1f s)", len(mine),
+                  os.path.join(cfg.out, "replay.html"), times["replay"])
+    rates, text = _summary(cfg, fld, rows, n_situations, times, started)
+    atomic_text(os.path.join(cfg.out, "summary.txt"), text)
+    _LOG.info("%s", text.rstrip("\n"))
+    _LOG.info("wrote %s, summary.txt, figures and models/ in %s",
+              os.path.join(cfg.out, "shots.csv"), cfg.out)
+    return rates

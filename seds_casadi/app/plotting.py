@@ -11,7 +11,7 @@ import os
 
 import numpy as np
 
-__all__ = ["plot_streamlines", "save_figure", "plot_success_map", "plot_regression_1d",
+__all__ = ["plot_streamlines", "plot_fit_views", "save_figure", "plot_success_map", "plot_regression_1d",
            "plot_joint_gmm", "plot_field", "plot_arm_frames", "plot_strategies",
            "STRATEGY_COLOURS"]
 
@@ -30,67 +30,6 @@ def _plt():
     return plt
 
 
-def plot_streamlines(ds, demos=None, reproductions=None, ax=None, title=None,
-                     normalised: bool = False, margin: float = 0.15, density: float = 1.2):
-    """Streamlines of a 2-D DS (or the x-y plane through the target of a higher-dimensional one).
-
-    Parameters
-    ----------
-    ds : StableDS or any object with ``predict(X)`` and ``target``
-    demos : Demonstrations, optional
-        Drawn as dots.
-    reproductions : list of array (T, d), optional
-        Drawn as lines.
-    ax : matplotlib Axes, optional
-    title : str, optional
-    normalised : bool
-        Colour by the target field h = f/||f|| (Eq. 8) instead of the speed of f.
-
-    Returns
-    -------
-    matplotlib Axes
-    """
-    plt = _plt()
-    if ax is None:
-        _, ax = plt.subplots(figsize=(5, 4.5))
-    d = len(ds.target)
-    pts = [ds.target[None, :2]]
-    if demos is not None:
-        pts += [p[:, :2] for p in demos.positions]
-    if reproductions is not None:
-        pts += [np.asarray(r)[:, :2] for r in reproductions]
-    P = np.concatenate(pts)
-    lo, hi = P.min(axis=0), P.max(axis=0)
-    span = np.maximum(hi - lo, 1e-9)
-    lo, hi = lo - margin * span, hi + margin * span
-    gx, gy = np.meshgrid(np.linspace(lo[0], hi[0], 60), np.linspace(lo[1], hi[1], 60))
-    grid = np.tile(ds.target, (gx.size, 1))
-    grid[:, 0], grid[:, 1] = gx.ravel(), gy.ravel()
-    F = ds.predict(grid)[:, :2]
-    speed = np.linalg.norm(F, axis=1)
-    if normalised:
-        F = F / np.maximum(speed, 1e-300)[:, None]
-    ax.streamplot(gx, gy, F[:, 0].reshape(gx.shape), F[:, 1].reshape(gx.shape),
-                  color=np.log10(np.maximum(speed, 1e-12)).reshape(gx.shape), cmap="Greys_r",
-                  density=density, linewidth=0.7, arrowsize=0.8)
-    if demos is not None:
-        for p in demos.positions:
-            ax.plot(p[:, 0], p[:, 1], ".", color="tab:red", ms=2.5, alpha=0.7)
-    if reproductions is not None:
-        for r in reproductions:
-            r = np.asarray(r)
-            ax.plot(r[:, 0], r[:, 1], "-", color="tab:blue", lw=1.5)
-    ax.plot(*ds.target[:2], "k*", ms=12)
-    ax.set_xlim(lo[0], hi[0])
-    ax.set_ylim(lo[1], hi[1])
-    ax.set_aspect("equal", adjustable="box")
-    ax.set_xlabel("x1" if d == 2 else "x")
-    ax.set_ylabel("x2" if d == 2 else "y")
-    if title:
-        ax.set_title(title, fontsize=9)
-    return ax
-
-
 def save_figure(fig, path: str | os.PathLike, dpi: int = 110) -> None:
     """Save a figure atomically (written to a temporary name, then renamed) and close it."""
     plt = _plt()
@@ -104,6 +43,10 @@ def save_figure(fig, path: str | os.PathLike, dpi: int = 110) -> None:
         if os.path.exists(tmp):
             os.unlink(tmp)
         plt.close(fig)
+
+
+# the DS figures live in plot_ds (they were defined here first)
+from .plot_ds import plot_fit_views, plot_streamlines  # noqa: E402
 
 
 def plot_success_map(success: np.ndarray, alphas, kappas, ax=None, title=None, chosen=None):
@@ -126,11 +69,14 @@ def plot_success_map(success: np.ndarray, alphas, kappas, ax=None, title=None, c
     a = np.rad2deg(np.asarray(alphas))
     ax.pcolormesh(a, kappas, np.asarray(success, float), shading="nearest",
                   cmap=ListedColormap(["#d9534f", "#5cb85c"]), vmin=0, vmax=1)
+    key = [plt.Line2D([], [], ls="", marker="s", ms=9, color="#5cb85c", label="sinks the ball"),
+           plt.Line2D([], [], ls="", marker="s", ms=9, color="#d9534f", label="misses")]
     if chosen is not None:
-        ax.plot(np.rad2deg(chosen[0]), chosen[1], "kx", ms=10, mew=2, label="teacher")
-        ax.legend(loc="upper right", fontsize=8)
+        key += ax.plot(np.rad2deg(chosen[0]), chosen[1], "kx", ms=10, mew=2,
+                       label="the teacher's choice")
+    ax.legend(handles=key, loc="upper right", fontsize=8, framealpha=0.9)
     ax.set_xlabel("hitting angle alpha [deg]")
-    ax.set_ylabel("speed gain kappa")
+    ax.set_ylabel("speed gain kappa (of v*)")
     if title:
         ax.set_title(title, fontsize=9)
     return ax
@@ -200,7 +146,7 @@ def plot_strategies(field, stroke, strategies, ball, hole, ax_map=None, ax_field
     ax_map.legend(handles=handles, fontsize=6.5, loc="upper center",
                   bbox_to_anchor=(0.5, -0.16), ncol=1)
     ax_map.set_xlabel("hitting angle alpha [deg]")
-    ax_map.set_ylabel("speed gain kappa")
+    ax_map.set_ylabel("speed gain kappa (of v*)")
     ax_map.set_title(f"Fig. 4a with strategies: ball {np.round(ball, 2).tolist()}, hole "
                      f"{np.round(hole, 2).tolist()}", fontsize=9)
     plot_field(field, ax=ax_field, ball=ball, hole=hole)
@@ -213,7 +159,8 @@ def plot_strategies(field, stroke, strategies, ball, hole, ax_map=None, ax_field
         for (lab, _), path in zip(shots, res_paths.paths):
             ax_field.plot(path[:, 0], path[:, 1], "-", lw=3 if lab == chosen else 1.5,
                           color=STRATEGY_COLOURS[lab % len(STRATEGY_COLOURS)])
-    ax_field.set_title("each strategy's centre shot from this ball", fontsize=9)
+    ax_field.set_title(f"{field.name}: each strategy's centre shot from this ball\n(colours as "
+                       f"on the map; thick: the one played)", fontsize=9)
     return ax_map, ax_field
 
 
@@ -250,8 +197,8 @@ def plot_regression_1d(x, y, train, models: dict, ax_row=None, xlabel="s_y [m]",
         ax.fill_between(x_query, mean[:, 0] - 2 * sd, mean[:, 0] + 2 * sd, color="0.8",
                         label="2 sigma")
         ax.plot(x_query, mean[:, 0], "b-", lw=1.5, label="mean")
-        ax.plot(xs[test], y[test], "r+", ms=8, mew=1.5, label="data")
-        ax.plot(xs[train], y[train], "k+", ms=8, mew=1.5, label="training")
+        ax.plot(xs[test], y[test], "r+", ms=8, mew=1.5, label="test data")
+        ax.plot(xs[train], y[train], "k+", ms=8, mew=1.5, label="training data")
         ax.set_title(title, fontsize=9)
         ax.set_xlabel(xlabel)
     ax_row[0].set_ylabel(ylabel)
@@ -279,7 +226,7 @@ def plot_joint_gmm(model, outputs: np.ndarray, ax_row=None, names=("alpha [deg]"
                                                   for k in range(K)]
     ax = ax_row[0]
     d = model.n_inputs_
-    ax.plot(outputs[:, 0], outputs[:, 1], "k.", ms=4)
+    ax.plot(outputs[:, 0], outputs[:, 1], "k.", ms=4, label="teacher's shots")
     t = np.linspace(0, 2 * np.pi, 100)
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     for k in range(K):
@@ -287,11 +234,13 @@ def plot_joint_gmm(model, outputs: np.ndarray, ax_row=None, names=("alpha [deg]"
         C = gm.covariances_[k][d:d + 2, d:d + 2]
         w, V = np.linalg.eigh(C)
         ell = (V * 2 * np.sqrt(np.maximum(w, 0))) @ np.vstack([np.cos(t), np.sin(t)])
-        ax.plot(mu[0] + ell[0], mu[1] + ell[1], color=colors[k % len(colors)], lw=1.5)
+        ax.plot(mu[0] + ell[0], mu[1] + ell[1], color=colors[k % len(colors)], lw=1.5,
+                label=f"Gaussian {k + 1} (2 sigma)")
         ax.plot(*mu, "o", color=colors[k % len(colors)])
     ax.set_xlabel(names[0])
     ax.set_ylabel(names[1])
-    ax.set_title("outputs and Gaussians (2 sigma)", fontsize=9)
+    ax.legend(fontsize=7)
+    ax.set_title("outputs and Gaussians", fontsize=9)
     labels = ["s_x", "s_y", names[0].split()[0], names[1].split()[0]][-gm.means_.shape[1]:]
     for k in range(K):
         C = gm.covariances_[k]
@@ -303,14 +252,15 @@ def plot_joint_gmm(model, outputs: np.ndarray, ax_row=None, names=("alpha [deg]"
             for j in range(len(R)):
                 a.text(j, i, f"{R[i, j]:.2f}", ha="center", va="center", fontsize=7,
                        color="w" if R[i, j] > 0.5 else "k")
-        a.set_xticks(range(len(R)), labels, fontsize=7)
-        a.set_yticks(range(len(R)), labels, fontsize=7)
+        a.set_xticks(range(len(R)), labels, fontsize=8)
+        a.set_yticks(range(len(R)), labels, fontsize=8)
         a.set_title(f"|corr|, Gaussian {k + 1}", fontsize=9, color=colors[k % len(colors)])
     return ax_row
 
 
-def plot_field(field, ax=None, paths=None, sunk=None, ball=None, hole=None, n: int = 200):
-    """The field's height map with ball paths (green: sunk, red: missed).
+def plot_field(field, ax=None, paths=None, sunk=None, ball=None, hole=None, n: int = 200,
+               checked=None, legend: bool = True):
+    """The field's height map with ball paths (green: sunk, red: missed) and a key.
 
     Parameters
     ----------
@@ -318,30 +268,57 @@ def plot_field(field, ax=None, paths=None, sunk=None, ball=None, hole=None, n: i
     paths : list of array (T, 2), optional
     sunk : array of bool, optional
     ball, hole : array, shape (2,) or (n, 2), optional
+    checked : list of (ball (2,), agreed: bool), optional
+        Shots checked again in exudyn: a diamond at the ball, filled when exudyn agreed.
+    legend : bool
+        A key of the paths, balls, holes and checks drawn.
     """
+    from matplotlib.lines import Line2D
+
     plt = _plt()
     if ax is None:
         _, ax = plt.subplots(figsize=(8, 3.4))
     b = field.bounds
     X, Y = np.meshgrid(np.linspace(b[0], b[1], n), np.linspace(b[2], b[3], max(20, n // 3)))
     Z = field.surface.height(np.column_stack([X.ravel(), Y.ravel()])).reshape(X.shape)
-    im = ax.contourf(X, Y, Z * 100, levels=20, cmap="terrain")
-    plt.colorbar(im, ax=ax, label="height [cm]", shrink=0.8)
+    if np.ptp(Z) > 1e-6:   # a height map; a flat field is one colour, said in the key
+        im = ax.contourf(X, Y, Z * 100, levels=20, cmap="terrain")
+        plt.colorbar(im, ax=ax, label="surface height [cm]", shrink=0.8)
+        flat = []
+    else:
+        ax.set_facecolor("#b8dcb0")
+        flat = [plt.Line2D([], [], ls="", marker="s", ms=9, color="#b8dcb0",
+                           label=f"flat surface (z = {float(Z.mean()) * 100:.3g} cm)")]
     holes = np.atleast_2d(field.hole if hole is None else hole)
     for h in holes:
         ax.add_patch(plt.Circle(h, field.hole_radius, color="k", fill=False, lw=1.2))
+    key = flat + [Line2D([], [], color="k", marker="o", mfc="none", ms=8, ls="",
+                         label="hole")]
     for i, p in enumerate(paths or []):
         ok = bool(sunk[i]) if sunk is not None else True
         ax.plot(p[:, 0], p[:, 1], "-", color="g" if ok else "r", lw=0.9, alpha=0.8)
+    if paths:
+        found = {bool(sunk[i]) if sunk is not None else True for i in range(len(paths))}
+        key += [Line2D([], [], color=c, label=lab) for ok, c, lab in
+                ((True, "g", "ball path, sunk"), (False, "r", "ball path, missed")) if ok in found]
     if ball is not None:
         B = np.atleast_2d(ball)
         ax.plot(B[:, 0], B[:, 1], "wo", mec="k", ms=4)
+        key.append(Line2D([], [], color="w", marker="o", mec="k", ms=4, ls="", label="ball"))
+    for xy, agreed in checked or []:
+        ax.plot(*xy, "D", ms=9, mec="m", mfc="m" if agreed else "none", mew=1.5, alpha=0.8)
+    if checked:
+        key.append(Line2D([], [], color="m", marker="D", ms=7, ls="",
+                          label="checked in exudyn (filled: agrees)"))
     ax.set_aspect("equal")
     ax.set_xlim(b[0], b[1])
     ax.set_ylim(b[2], b[3])
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.set_title(field.name, fontsize=9)
+    if legend:
+        ax.legend(handles=key, fontsize=7, loc="upper left", bbox_to_anchor=(1.18, 1.0),
+                  frameon=False)
     return ax
 
 
@@ -372,11 +349,14 @@ def plot_arm_frames(robot, qs, ax=None, ball=None, colors=None, alpha_min: float
         P = np.array(pts + [flange])
         a = alpha_min + (1 - alpha_min) * i / max(1, len(qs) - 1)
         c = colors[i] if colors is not None else "k"
-        ax.plot(P[:, 0], P[:, 1], P[:, 2], "-o", color=c, ms=2.5, lw=1.6, alpha=a)
+        last = i == len(qs) - 1
+        ax.plot(P[:, 0], P[:, 1], P[:, 2], "-o", color=c, ms=2.5, lw=1.6, alpha=a,
+                label=f"{robot.name} arm (dots: joints)" if last else None)
         ax.plot([flange[0], head[0]], [flange[1], head[1]], [flange[2], head[2]], "-",
-                color="tab:brown", lw=2.2, alpha=a)
+                color="tab:brown", lw=2.2, alpha=a, label="club" if last else None)
     if ball is not None:
-        ax.scatter(*np.asarray(ball, float), s=40, color="w", edgecolors="k")
+        ax.scatter(*np.asarray(ball, float), s=40, color="w", edgecolors="k", label="ball")
+    ax.legend(fontsize=7, loc="upper left")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.set_zlabel("z [m]")

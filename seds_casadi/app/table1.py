@@ -154,13 +154,19 @@ def _figures(datasets: dict, out: str) -> None:
     two = [ds for _, ds in datasets.values() if ds.outputs.shape[1] == 2]
     if one:
         name, ds = next(((n, d) for n, d in one if n == "double_hill"), one[0])
-        fig, axs = plt.subplots(1, 2, figsize=(10, 3.6), sharey=True)
+        fig, axs = plt.subplots(1, 2, figsize=(10, 3.8), sharey=True)
         fig10(name, ds, ax_row=axs)
+        fig.suptitle(f"Fig. 10: {name}, the hitting angle by GPR and GMR from 8 training "
+                     f"shots", fontsize=10)
+        fig.tight_layout()
         save_figure(fig, os.path.join(out, "fig10_gpr_gmr.png"))
     if two:
-        fig = plt.figure(figsize=(10.6, 3.8))
-        axs = [fig.add_subplot(1, 4, i + 1) for i in range(4)]
+        fig = plt.figure(figsize=(13, 4.0))
+        grid = fig.add_gridspec(1, 4, width_ratios=[1.4, 1, 1, 1], wspace=0.35)
+        axs = [fig.add_subplot(grid[0, i]) for i in range(4)]
         fig11(two[0], ax_row=axs)
+        fig.suptitle(f"Fig. 11: {two[0].field}, the joint GMM (K = 3) of the situation s and "
+                     f"the hitting parameters (alpha [deg], kappa)", fontsize=10)
         save_figure(fig, os.path.join(out, "fig11_joint_gmm.png"))
 
 
@@ -200,5 +206,6 @@ def table1_command(config: Table1Config | None = None, **overrides) -> list[Tabl
     atomic_text(os.path.join(cfg.out, "table1.txt"), text)
     if cfg.figures:
         _figures(datasets, cfg.out)
-    _LOG.info("wrote %s and figures in %s", os.path.join(cfg.out, "table1.csv"), cfg.out)
+    _LOG.info("wrote table1.csv, table1_repetitions.csv, table1.txt, datasets/%s in %s",
+              " and Fig. 10 and 11" if cfg.figures else "", cfg.out)
     return means

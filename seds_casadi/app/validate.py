@@ -10,7 +10,7 @@ from __future__ import annotations
 import logging
 import os
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -49,6 +49,11 @@ class ValidateConfig:
     seed : int
     progress : bool
         Progress bars (on stderr, only on a terminal).
+    quick : bool
+        At most 3 shots and a coarser teacher: a check in well under a minute.
+    workers : int
+        Local worker processes for the shots (each plays its shots in Pinocchio and exudyn;
+        the results do not depend on the number).
     """
 
     robot: str = "wam"
@@ -57,13 +62,16 @@ class ValidateConfig:
     out: str = "validate_out"
     seed: int = 0
     progress: bool = True
+    quick: bool = False
+    workers: int = 1
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "shots", whole_number("shots", self.shots, 1))
+        object.__setattr__(self, "workers", whole_number("workers", self.workers, 1))
         object.__setattr__(self, "seed", whole_number("seed", self.seed, 0))
 
 
-def _learn(fld, robot: str, progress: bool):
+def _learn(fld, robot: str, progress: bool, quick: bool = False):
     """The hitting motion, the teacher's data set for the field (checked against the robot's
     reach) and GPR fitted on it."""
     from ..minigolf.parameters import make_model
@@ -73,14 +81,42 @@ def _learn(fld, robot: str, progress: bool):
 
     t0 = time.perf_counter()
     motion = HittingMotion.fit(load_hitting_demos(), n_components=3)
-    data = collect_dataset(fld, Stroke.from_motion(motion), resolution=(121, 41),
-                           progress=progress)
+    data = collect_dataset(fld, Stroke.from_motion(motion),
+                           resolution=(81, 26) if quick else (121, 41), progress=progress)
     check_reach(robot, fld, data.ball, data.alpha, motion.hitting_direction,
                 "situations the teacher taught")
-    model = make_model("gpr").fit(data.situations, data.outputs)
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(1):   # see play: BLAS threads slow small GPR fits down
+        model = make_model("gpr").fit(data.situations, data.outputs)
     _LOG.info("hitting motion, teacher (%d good shots) and GPR: %.1f s", len(data),
               time.perf_counter() - t0)
     return motion, data, model
+
+
+def _play_shots(cfg: ValidateConfig, fld, motion, model, data, rng):
+    """Every shot's task (situations drawn in order, the model's prediction), played here or
+    on ``cfg.workers`` processes; rows and figure data in the shots' order."""
+    from .executors import open_executor
+
+    tasks = []
+    for i in range(cfg.shots):
+        ball, hole = _situation(fld, rng)
+        pred = model.predict((hole - ball)[None])[0]
+        tasks.append({"cfg": cfg, "i": i, "field": fld.name, "field_spec": fld.spec,
+                      "motion": motion, "ball": ball.tolist(), "hole": hole.tolist(),
+                      "alpha": float(np.deg2rad(pred[0])),
+                      "kappa": float(pred[1]) if len(pred) > 1 else float(data.kappa[0])})
+    if cfg.workers > 1:   # processes load the motion from its folder
+        folder = os.path.join(cfg.out, "models", "motion")
+        motion.save(folder)
+        for t in tasks:
+            t["motion"] = os.path.abspath(folder)
+    with open_executor(cfg.workers) as ex:
+        futures = [ex.submit(_shot, t) for t in tasks]
+        done = [f.result() for f in progress_bar(
+            futures, cfg.progress, desc=f"validate {cfg.robot} on {fld.name}", unit="shot")]
+    return [r for r, _ in done], [s for _, s in done]
 
 
 def _situation(fld, rng):
@@ -89,15 +125,21 @@ def _situation(fld, rng):
     return balls[0], holes[0]
 
 
-def _shot(cfg: ValidateConfig, fld, motion, model, data, ball, hole, i: int):
-    """One shot on both models: its row of ``validation.csv``, and what the figure needs (the
-    paths, the swing and the exudyn shot; None without a hit in exudyn)."""
+def _shot(task: dict):
+    """One shot on both models (a picklable task: ``cfg, field_spec, motion`` (a motion or
+    its folder), ``ball, hole, alpha [rad], kappa, i``): its row of ``validation.csv``, and
+    what the figure needs (the paths, the swing and the exudyn shot; None without a hit in
+    exudyn)."""
     from ..minigolf.ball import impact, simulate_shots
+    from ..minigolf.fields import Field
     from ..robots.control import place_robot, simulate_swing
+    from .play import _motion
 
-    pred = model.predict((hole - ball)[None])[0]
-    alpha = np.deg2rad(pred[0])
-    kappa = float(pred[1]) if len(pred) > 1 else float(data.kappa[0])
+    cfg, i = task["cfg"], task["i"]
+    fld = Field.from_dict(task["field_spec"], source=task["field"])
+    motion = _motion(task["motion"])
+    ball, hole = np.asarray(task["ball"], float), np.asarray(task["hole"], float)
+    alpha, kappa = task["alpha"], task["kappa"]
     z = float(fld.surface.height(ball[None])[0]) + BALL_RADIUS
     # the robot stands at its default place beside each ball, on the surface
     swing = simulate_swing(place_robot(cfg.robot, ball, fld), motion,
@@ -172,33 +214,28 @@ def validate(config: ValidateConfig | None = None, **overrides) -> list[dict]:
     from ..minigolf.fields import load_field
 
     cfg = with_overrides(ValidateConfig, config, overrides)
+    if cfg.quick:
+        cfg = replace(cfg, shots=min(cfg.shots, 3))
     fld = load_field(cfg.field)
     os.makedirs(cfg.out, exist_ok=True)
     rng = np.random.default_rng(cfg.seed)
-    motion, data, model = _learn(fld, cfg.robot, cfg.progress)
-    it = progress_bar(range(cfg.shots), cfg.progress, desc=f"validate {cfg.robot} on "
-                      f"{fld.name}", unit="shot")
-    rows, shots = [], []
-    for i in it:
-        ball, hole = _situation(fld, rng)
-        row, shot = _shot(cfg, fld, motion, model, data, ball, hole, i)
-        rows.append(row)
-        shots.append(shot)
+    motion, data, model = _learn(fld, cfg.robot, cfg.progress, cfg.quick)
+    rows, shots = _play_shots(cfg, fld, motion, model, data, rng)
     atomic_csv(os.path.join(cfg.out, "validation.csv"), VALIDATION_COLUMNS,
                ([r[c] for c in VALIDATION_COLUMNS] for r in rows))
     text = _report(cfg, fld, rows, shots)
     atomic_text(os.path.join(cfg.out, "report.txt"), text)
-    _report_figure(fld, shots, os.path.join(cfg.out, "validation.png"))
+    _report_figure(fld, shots, os.path.join(cfg.out, "validation.png"), cfg.robot)
     _LOG.info("%s", text.rstrip("\n"))
     return rows
 
 
-def _report_figure(fld, paths, path):
+def _report_figure(fld, paths, path, robot: str = ""):
     from .plotting import _plt, plot_field, save_figure
 
     plt = _plt()
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(14, 3.8), gridspec_kw={"width_ratios": [2.2, 1]})
-    plot_field(fld, ax=a1)
+    plot_field(fld, ax=a1, legend=False)
     for k, p in enumerate(paths):
         if p is None:
             continue
@@ -212,7 +249,15 @@ def _report_figure(fld, paths, path):
         if len(shot.head_speed):
             a2.plot(shot.head_speed[:, 0] - shot.contact_time, shot.head_speed[:, 1], ":",
                     color=c, lw=1.2)
-    a1.set_title("ball paths: fast model (solid), exudyn (dashed)", fontsize=9)
+    a1.set_title(f"{fld.name}, the {robot}: ball paths, one colour per shot", fontsize=9)
+    a1.legend(handles=[plt.Line2D([], [], color="k", lw=1, label="fast ball model"),
+                       plt.Line2D([], [], color="k", ls="--", lw=1, label="exudyn"),
+                       plt.Line2D([], [], color="k", marker="o", mfc="none", ms=8, ls="",
+                                  label="hole")], fontsize=7, loc="upper left",
+              framealpha=0.85)
+    a2.legend(handles=[plt.Line2D([], [], color="k", lw=1, label="Pinocchio swing"),
+                       plt.Line2D([], [], color="k", ls=":", lw=1.2, label="exudyn arm")],
+              fontsize=7)
     a2.set_xlim(-0.3, 0.15)
     a2.set_xlabel("time from the hit [s]")
     a2.set_ylabel("club-head speed [m/s]")

@@ -8,11 +8,28 @@ import tempfile
 from collections.abc import Iterable
 
 
+def _umask() -> int:
+    """The process's umask (read by setting and restoring it)."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def _public(fd: int) -> None:
+    """Give a temporary file (``mkstemp`` makes it 0600) the mode a plain ``open`` would:
+    0666 minus the umask (0644 under the usual umask 022)."""
+    try:
+        os.fchmod(fd, 0o666 & ~_umask())
+    except (AttributeError, OSError):  # no fchmod (Windows) or a file system without modes
+        pass
+
+
 def atomic_text(path: str | os.PathLike, text: str) -> None:
     """Write ``text`` to ``path`` through a temporary file in the same folder."""
     path = os.fspath(path)
     folder = os.path.dirname(os.path.abspath(path))
     fd, tmp = tempfile.mkstemp(prefix=".tmp-", dir=folder)
+    _public(fd)
     try:
         with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
             fh.write(text)
@@ -30,6 +47,7 @@ def atomic_npz(path: str | os.PathLike, **arrays) -> None:
     path = os.fspath(path)
     folder = os.path.dirname(os.path.abspath(path))
     fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".npz", dir=folder)
+    _public(fd)
     try:
         with os.fdopen(fd, "wb") as fh:
             np.savez(fh, **arrays)

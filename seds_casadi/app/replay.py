@@ -1,0 +1,292 @@
+"""Replays of shots: the robot's swing and the ball rolling on the field, to watch.
+
+A shot of :func:`seds_casadi.app.play.play_shot` is simulated again (the same task gives the
+same swing: the 500 Hz controller on Pinocchio's forward dynamics, then the ball model) and
+kept as a :class:`Replay`: per frame, the arm's chain (base, each joint's origin, the flange, the
+club head, from Pinocchio's forward kinematics at the simulated configurations), the club
+head's face and the ball on the field's surface. :func:`write_replay` writes
+
+* ``replay.html``: a self-contained page (no network, no library: the data are embedded and
+  drawn on a canvas in a perspective 3-D view; drag turns it, the wheel zooms, a menu picks
+  the shot, a slider scrubs the time);
+* ``replay_<learner>_<shot>.gif`` per shot: the same scene in matplotlib's 3-D axes, for papers.
+
+``seds-casadi play --replay [N]`` replays the first N shots of its round.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..core._io import _umask, atomic_text, data_folder
+
+__all__ = ["Replay", "replay_shot", "write_replay", "write_replay_html", "write_replay_gif",
+           "REPLAY_COLOURS"]
+
+#: colours (RGB 0-255) of the page and the GIF: the screenshot test looks for them
+REPLAY_COLOURS = {"field": (70, 150, 70), "robot": (230, 90, 20), "joint": (60, 60, 60),
+                  "base": (90, 90, 110), "club": (40, 40, 40), "ball": (255, 255, 255),
+                  "hole": (20, 20, 20), "trail": (30, 60, 200), "wall": (120, 80, 40)}
+
+
+@dataclass(frozen=True)
+class Replay:
+    """One shot, frame by frame (field frame, z up, metres, seconds).
+
+    Attributes
+    ----------
+    t : array, shape (n,)
+        Frame times from the start of the swing [s], equally spaced by ``frame_dt``.
+    chain : array, shape (n, m, 3)
+        The arm's points: the base on the floor, each joint's origin, the flange
+        (index ``flange_index``) and the club head's centre (the last).
+    head_ends : array, shape (n, 2, 3)
+        The ends of the club head's face (4 cm across the face's normal).
+    ball : array, shape (n, 3)
+        The ball's centre (on the surface; below it once sunk).
+    hit_time : float
+        When the club met the ball (nan: it did not).
+    label : str
+        The shot's name (learner, number, result).
+    row : dict
+        The shot's row of ``shots.csv`` (:data:`seds_casadi.app.play.SHOT_COLUMNS`).
+    field, robot : str
+        Their names.
+    """
+
+    t: np.ndarray
+    chain: np.ndarray
+    head_ends: np.ndarray
+    ball: np.ndarray
+    flange_index: int
+    hit_time: float
+    label: str
+    row: dict
+    field: str
+    robot: str
+
+    @property
+    def frame_dt(self) -> float:
+        return float(self.t[1] - self.t[0]) if len(self.t) > 1 else 1.0
+
+
+def _chain(robot, q) -> tuple[np.ndarray, np.ndarray]:
+    """The arm's points at ``q`` (base, joint origins, flange, head) and the head's face ends."""
+    import pinocchio as pin
+
+    pin.forwardKinematics(robot.model, robot.data, np.asarray(q, float))
+    M = robot.base_placement
+    pts = [np.array(robot.base[:3], float)]
+    pts += [M.act(robot.data.oMi[j].translation) for j in range(1, robot.model.njoints)]
+    head, R = robot.head_pose(q)
+    pts += [head + R[:, 2] * robot.club.length, head]   # the shaft runs along the head's z
+    across = R[:, 1] * 0.02
+    return np.array(pts), np.array([head - across, head + across])
+
+
+def replay_shot(task: dict, fps: float = 25.0, max_time: float = 8.0) -> Replay:
+    """Simulate one shot of ``play`` again and keep it frame by frame.
+
+    Parameters
+    ----------
+    task : dict
+        A task of :func:`seds_casadi.app.play.play_shot` (``method, shot, ball, hole, alpha
+        [rad], kappa, robot, field, field_spec, motion``).
+    fps : float
+        Frames per second of simulated time.
+    max_time : float
+        The replay ends at most this long after the swing starts [s] (a long roll is cut).
+
+    Returns
+    -------
+    Replay
+    """
+    from ..minigolf.ball import BALL_RADIUS
+    from ..minigolf.fields import Field
+    from ..robots.control import place_robot
+    from .play import play_shot
+
+    if not (np.isfinite(fps) and fps > 0 and np.isfinite(max_time) and max_time > 0):
+        raise ValueError(f"fps and max_time must be positive, got {fps!r} and {max_time!r}")
+    row = play_shot(dict(task, keep_swing=True))
+    swing = row.pop("swing", None)
+    if swing is None:
+        raise ValueError(f"shot {task.get('shot')} of {task.get('method')}: the swing could not "
+                         f"start ({row.get('error', 'no swing')}); nothing to replay")
+    fld = Field.from_dict(task["field_spec"], source=task["field"])
+    ball0 = np.asarray(task["ball"], float)
+    robot = place_robot(task["robot"], ball0, fld)
+    path = np.asarray(row.pop("path", ball0[None]), float)
+    hit_t = swing.hit_time if swing.hit else np.inf
+    roll_end = hit_t + 0.01 * (len(path) - 1) + 0.3 if swing.hit else swing.t[-1]
+    end = min(max_time, max(float(swing.t[-1]), roll_end))
+    t = np.arange(0.0, end + 1e-9, 1.0 / fps)
+    k_swing = np.clip(np.searchsorted(swing.t, t), 0, len(swing.t) - 1)
+    chains, heads = zip(*(_chain(robot, swing.q[k]) for k in k_swing))
+    k_ball = np.clip(np.round((t - hit_t) / 0.01), 0, len(path) - 1)
+    k_ball = np.where(t < hit_t, 0, k_ball).astype(int)
+    xy = path[k_ball]
+    z = fld.surface.height(xy) + BALL_RADIUS
+    if row["sunk"]:   # in the hole once it has stopped there
+        z = np.where(k_ball == len(path) - 1, z - 2 * BALL_RADIUS, z)
+    res = "sunk" if row["sunk"] else ("missed" if row["hit"] else "no hit")
+    return Replay(t, np.array(chains), np.array(heads), np.column_stack([xy, z]),
+                  len(chains[0]) - 2, float(swing.hit_time), f"{task['method']} shot "
+                  f"{task['shot']} ({res})", row, fld.name, str(task["robot"]))
+
+
+def _field_grid(field, n: int = 36) -> dict:
+    b = np.asarray(field.bounds, float)
+    nx = max(8, int(round(n * (b[1] - b[0]) / max(b[1] - b[0], b[3] - b[2]))))
+    ny = max(8, int(round(n * (b[3] - b[2]) / max(b[1] - b[0], b[3] - b[2]))))
+    x, y = np.linspace(b[0], b[1], nx), np.linspace(b[2], b[3], ny)
+    X, Y = np.meshgrid(x, y)
+    Z = field.surface.height(np.column_stack([X.ravel(), Y.ravel()])).reshape(X.shape)
+    return {"x": x, "y": y, "z": Z, "bounds": b}
+
+
+def _r4(a) -> list:
+    """Coordinates rounded to 0.1 mm, as JSON lists."""
+    return np.round(np.asarray(a, float), 4).tolist()
+
+
+def _page_data(replays: list[Replay], field, title: str) -> dict:
+    from ..minigolf.ball import BALL_RADIUS
+
+    g = _field_grid(field)
+    shots = [{"label": r.label, "t": _r4(r.t), "frame_dt": r.frame_dt, "chain": _r4(r.chain),
+              "head_ends": _r4(r.head_ends), "ball": _r4(r.ball), "flange_index": r.flange_index,
+              "hole": _r4([r.row["hole_x_m"], r.row["hole_y_m"]]),
+              "alpha_deg": float(r.row["alpha_deg"]), "kappa": float(r.row["kappa"]),
+              "sunk": bool(r.row["sunk"])} for r in replays]
+    return {"title": title, "shots": shots, "robot": replays[0].robot, "ball_radius": BALL_RADIUS,
+            "colours": {k: list(v) for k, v in REPLAY_COLOURS.items()},
+            "field": {"x": _r4(g["x"]), "y": _r4(g["y"]), "z": _r4(g["z"]),
+                      "zmin": float(g["z"].min()), "zmax": float(g["z"].max()),
+                      "bounds": _r4(g["bounds"]), "walls": field.boundary == "walls",
+                      "hole_radius": float(field.hole_radius)}}
+
+
+def _title(replays: list[Replay]) -> str:
+    r = replays[0]
+    learners = sorted({x.row["method"] for x in replays})
+    return (f"seds_casadi replay: the {r.robot} on {r.field}, "
+            f"{len(replays)} shot{'s' * (len(replays) > 1)} by {', '.join(learners)}")
+
+
+def write_replay_html(replays: list[Replay], field, path: str | os.PathLike) -> str:
+    """Write the self-contained replay page of ``replays`` (module docstring) to ``path``."""
+    if not replays:
+        raise ValueError("no shots to replay")
+    with open(os.path.join(data_folder("seds_casadi.data"), "replay.html"),
+              encoding="utf-8") as fh:
+        page = fh.read()
+    title = _title(replays)
+    data = json.dumps(_page_data(replays, field, title), separators=(",", ":"))
+    page = page.replace("__TITLE__", title).replace("__DATA__", data.replace("</", "<\\/"))
+    atomic_text(path, page)
+    return os.fspath(path)
+
+
+def write_replay_gif(replay: Replay, field, path: str | os.PathLike, max_frames: int = 60,
+                     fps: float = 12.0, dpi: int = 90) -> str:
+    """Write one shot as an animated GIF (matplotlib 3-D axes, Pillow) to ``path``.
+
+    The frames are spread evenly over the replay (at most ``max_frames``), so a long roll plays
+    faster than real time; the title gives the simulated time of each frame."""
+    from matplotlib.animation import PillowWriter
+
+    from .plotting import _plt
+
+    plt = _plt()
+    c = {k: np.array(v) / 255 for k, v in REPLAY_COLOURS.items()}
+    g = _field_grid(field, 24)
+    X, Y = np.meshgrid(g["x"], g["y"])
+    fig = plt.figure(figsize=(6.4, 4.8))
+    ax = fig.add_subplot(projection="3d")
+    ax.plot_surface(X, Y, g["z"], color=c["field"], alpha=0.55, linewidth=0, shade=True)
+    hole = np.array([replay.row["hole_x_m"], replay.row["hole_y_m"]])
+    a = np.linspace(0, 2 * np.pi, 30)
+    hx, hy = hole[0] + field.hole_radius * np.cos(a), hole[1] + field.hole_radius * np.sin(a)
+    ax.plot(hx, hy, field.surface.height(np.column_stack([hx, hy])) + 1e-3, color="k",
+            label="hole")
+    pts = np.concatenate([replay.chain.reshape(-1, 3), replay.ball])
+    lo = np.minimum(pts.min(0), [g["bounds"][0], g["bounds"][2], 0])
+    hi = np.maximum(pts.max(0), [g["bounds"][1], g["bounds"][3], 0.1])
+    ax.set(xlim=(lo[0], hi[0]), ylim=(lo[1], hi[1]), zlim=(lo[2], hi[2]),
+           xlabel="x [m]", ylabel="y [m]", zlabel="z [m]")
+    ax.set_box_aspect(hi - lo, zoom=1.12)
+    fig.subplots_adjust(left=0.02, right=0.9, bottom=0.04, top=0.9)
+    ax.view_init(elev=28, azim=-60)
+    arm, = ax.plot([], [], [], "-o", color=c["robot"], lw=4, ms=3, mfc=c["joint"],
+                   label=f"{replay.robot} arm")
+    club, = ax.plot([], [], [], "-", color=c["club"], lw=2, label="club")
+    trail, = ax.plot([], [], [], "-", color=c["trail"], lw=1.5, label="ball path")
+    ball, = ax.plot([], [], [], "o", color="w", mec="k", ms=6, label="ball")
+    ax.legend(loc="upper left", fontsize=7)
+    frames = np.unique(np.linspace(0, len(replay.t) - 1, min(max_frames, len(replay.t)))
+                       .astype(int))
+    writer = PillowWriter(fps=fps)
+    tmp = os.path.join(os.path.dirname(os.path.abspath(path)), f".tmp-{os.getpid()}.gif")
+    try:
+        with writer.saving(fig, tmp, dpi):
+            for k in frames:
+                ch, f = replay.chain[k], replay.flange_index
+                arm.set_data_3d(ch[:f + 1, 0], ch[:f + 1, 1], ch[:f + 1, 2])
+                club.set_data_3d(ch[f:, 0], ch[f:, 1], ch[f:, 2])
+                trail.set_data_3d(replay.ball[:k + 1, 0], replay.ball[:k + 1, 1],
+                                  replay.ball[:k + 1, 2])
+                ball.set_data_3d(replay.ball[k:k + 1, 0], replay.ball[k:k + 1, 1],
+                                 replay.ball[k:k + 1, 2])
+                ax.set_title(f"{replay.field}: the {replay.robot}, {replay.label}\n"
+                             f"t = {replay.t[k]:.2f} s, alpha = "
+                             f"{replay.row['alpha_deg']:.2f} deg, kappa = "
+                             f"{replay.row['kappa']:.3f}", fontsize=9)
+                writer.grab_frame()
+        os.chmod(tmp, 0o644 & ~_umask())
+        os.replace(tmp, path)
+    finally:
+        plt.close(fig)
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+    return os.fspath(path)
+
+
+def write_replay(tasks: list[dict], out: str | os.PathLike, gif: bool = True,
+                 fps: float = 25.0, max_time: float = 8.0, progress=None) -> dict:
+    """Replay ``tasks`` (shots of :func:`seds_casadi.app.play.play_shot`, on one field) into
+    ``out``: ``replay.html`` with all of them and, with ``gif``, one GIF per shot.
+
+    Parameters
+    ----------
+    progress : callable, optional
+        Called with a message before each shot (e.g. a logger's ``info``).
+
+    Returns
+    -------
+    dict
+        ``html`` (the page's path), ``gifs`` (paths), ``replays`` (the :class:`Replay` objects).
+    """
+    from ..minigolf.fields import Field
+
+    if not tasks:
+        raise ValueError("no shots to replay: give at least one task")
+    if len({t["field"] for t in tasks}) > 1:
+        raise ValueError("the shots of one replay page are on one field")
+    os.makedirs(out, exist_ok=True)
+    fld = Field.from_dict(tasks[0]["field_spec"], source=tasks[0]["field"])
+    replays, gifs = [], []
+    for i, task in enumerate(tasks):
+        if progress:
+            progress(f"replay {i + 1}/{len(tasks)}: simulating {task['method']} shot "
+                     f"{task['shot']} again")
+        replays.append(replay_shot(task, fps, max_time))
+        if gif:
+            gifs.append(write_replay_gif(replays[-1], fld, os.path.join(
+                out, f"replay_{task['method']}_{task['shot']}.gif")))
+    html = write_replay_html(replays, fld, os.path.join(out, "replay.html"))
+    return {"html": html, "gifs": gifs, "replays": replays}
