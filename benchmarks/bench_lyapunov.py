@@ -52,6 +52,7 @@ def _one(args):
     return {"shape": shape, "variant": variant, "train_rmse": train.rmse_mmps,
             "rmse": test.rmse_mmps, "e_dot": test.e_dot, "dtwd": test.dtwd_mm,
             "seconds": test.seconds, "iterations": test.iterations, "status": test.status,
+            "objective": test.objective_value,
             "certified": test.certified, "pub": (test.published_rmse_mmps, test.published_e_dot,
                                                  test.published_dtwd_mm)}
 
@@ -167,13 +168,15 @@ def main(argv: list[str] | None = None) -> int:
         if st == "test":
             print(f"  published {method} (26 shapes): RMSE {vals[0]:.2f}, e_dot {vals[1]:.3f}, "
                   f"DTWD {vals[2]:.0f}")
-    print("\nper shape (test): RMSE / e_dot / DTWD; published SEDS last")
+    print("\nper shape (test): RMSE / e_dot / DTWD, J = the training objective reached (scaled "
+          "units); published SEDS last")
     for s in a.shapes:
         cells = []
         for v in a.variants:
             r = next(r for r in rows if r["shape"] == s and r["variant"] == v)
             cells.append("failed" if "error" in r else
-                         f"{r['rmse']:6.2f} {r['e_dot']:.3f} {r['dtwd']:7.0f} ({r['seconds']:.0f} s)")
+                         f"{r['rmse']:6.2f} {r['e_dot']:.3f} {r['dtwd']:7.0f} J {r['objective']:.4f}"
+                         f" ({r['seconds']:.0f} s, {r['iterations']} it)")
         p = next((r["pub"] for r in rows if r["shape"] == s and "pub" in r), (np.nan,) * 3)
         mark = "*" if s in NAMED else " "
         print(f"{mark}{s:<17} " + " | ".join(cells) + f" | {p[0]:.2f} {p[1]:.3f} {p[2]:.0f}")

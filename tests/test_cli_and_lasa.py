@@ -54,6 +54,23 @@ def test_cli_fit_writes_a_loadable_model_and_figure(tmp_path, spiral_demos):
     assert '"status"' in res.stdout
 
 
+def test_cli_fit_with_a_learned_lyapunov_matrix_and_a_gain_limit(tmp_path, spiral_demos):
+    demo_file = tmp_path / "demos.npz"
+    save_demonstrations(demo_file, spiral_demos)
+    out = tmp_path / "out"
+    res = subprocess.run(_cli() + ["fit", str(demo_file), "-K", "2", "--objective", "mse",
+                                   "--lyapunov", "learned", "--gain-limit", "10",
+                                   "--out", str(out)], capture_output=True, text=True,
+                         timeout=600)
+    assert res.returncode == 0, res.stderr
+    model = StableDS.load(out / "model.npz")
+    assert model.fit_info["lyapunov"] == "learned"
+    P = model.lyapunov_matrix
+    assert np.trace(P) == pytest.approx(2.0)
+    for A in model.A:
+        assert np.linalg.eigvalsh(A.T @ P + P @ A).max() < 0
+
+
 def test_cli_lasa_writes_the_csv_with_the_documented_columns(tmp_path):
     out = tmp_path / "lasa"
     res = subprocess.run(_cli() + ["lasa", "--shapes", "Angle", "--objectives", "direction",

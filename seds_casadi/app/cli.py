@@ -89,6 +89,15 @@ def _add_fit(sub, quiet) -> None:
                         "velocities nor time stamps [from the file]")
     f.add_argument("--seed", type=int, default=0, help="random seed of the initialisation [0]")
     f.add_argument("--max-iter", type=int, default=1000, help="IPOPT iteration limit [1000]")
+    f.add_argument("--lyapunov", choices=("identity", "learned"), default="identity",
+                   help="the certificate's V = (x - x*)^T P (x - x*): P = I (SEDS) or a "
+                        "learned P [identity]")
+    f.add_argument("--formulation", choices=("by-construction", "constrained"),
+                   default="by-construction",
+                   help="Eq. 10 by the parametrization or as NLP constraints [by-construction]")
+    f.add_argument("--gain-limit", type=float, default=None,
+                   help="bound the stiffness of the components (units of the data's rate; "
+                        "10 is a good start) [none]")
     f.add_argument("--out", default="seds_out", help="output folder [seds_out]")
 
 
@@ -235,7 +244,8 @@ def _cmd_fit(a) -> int:
     demos = load_demonstrations(a.demonstrations, **kw)
     print(f"loaded {demos}")
     model = SEDS(a.components, objective=a.objective, random_state=a.seed,
-                 max_iter=a.max_iter).fit(demos).model_
+                 max_iter=a.max_iter, lyapunov=a.lyapunov, formulation=a.formulation,
+                 gain_limit=a.gain_limit).fit(demos).model_
     os.makedirs(a.out, exist_ok=True)
     path = os.path.join(a.out, "model.npz")
     model.save(path)

@@ -193,6 +193,8 @@ class DsOptResult:
     published_e_dot: float
     published_dtwd_mm: float
     published_k: int
+    #: the SEDS objective reached on the training set (``fit_info["objective"]``)
+    objective_value: float = float("nan")
 
 
 @dataclass(frozen=True)
@@ -336,7 +338,8 @@ def evaluate_shape_dsopt(shape: str, objective: str = "mse", n_components: int |
             float(np.mean(pointwise_direction_error(F, V, min_norm_product=0.0))),
             float(np.mean(dtw)), seconds, int(model.fit_info["iterations"]), K, certified,
             str(model.fit_info["status"]), how, k_seconds, len(paths[name]), end, rate,
-            float(pub[off]), float(pub[off + 1]), float(pub[off + 2]), int(pub[0])))
+            float(pub[off]), float(pub[off + 1]), float(pub[off + 2]), int(pub[0]),
+            float(model.fit_info["objective"])))
     if figure_path:
         from .plotting import _plt, plot_streamlines, save_figure
 
