@@ -71,6 +71,9 @@ SLOW_TESTS = {
     "test_evaluate_shape_dsopt_scores_train_and_test_with_a_certified_model",
     "test_cli_lasa_protocol_ds_opt_writes_the_csv_with_units",
     "test_run_lasa_runs_ds_opt_beside_the_other_protocols",
+    "test_hitting_motion_on_a_learned_lyapunov_model",
+    "test_seds_learns_and_reproduces_the_7d_joint_space_putts",
+    "test_direction_objective_moves_at_the_demonstrated_speeds",
 }
 
 

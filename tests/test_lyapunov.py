@@ -334,3 +334,19 @@ def test_gain_limit_bounds_the_stiffness_of_every_component(lyapunov):
     assert max(np.linalg.norm(A, 2) for A in free.A) > max(np.linalg.norm(A, 2) for A in m.A)
     with pytest.raises(ValueError, match="gain_limit"):
         SEDS(1, gain_limit=-1.0).fit(demos)
+
+
+def test_hitting_motion_on_a_learned_lyapunov_model(tmp_path):
+    """Eq. 8, 12 and 14 work unchanged on a model certified by a learned P, and it saves."""
+    from seds_casadi.motion import HittingMotion, load_hitting_demos
+
+    motion = HittingMotion.fit(load_hitting_demos(), n_components=3, lyapunov="learned")
+    P = motion.target_field.ds.lyapunov_matrix
+    assert not np.allclose(P, np.eye(3))
+    swing = motion.rollout(np.array([-0.3, 0.1, 0.05]), alpha=0.2, kappa=1.2)
+    assert swing.direction_error_deg < 1.0 and abs(swing.speed_error) < 0.02
+    motion.save(tmp_path / "m")
+    back = HittingMotion.load(tmp_path / "m")
+    np.testing.assert_array_equal(back.target_field.ds.lyapunov_matrix, P)
+    x = np.array([[-0.3, 0.1, 0.05], [-0.2, -0.1, 0.02]])
+    np.testing.assert_allclose(back.velocity(x, 0.2, 1.2), motion.velocity(x, 0.2, 1.2))
