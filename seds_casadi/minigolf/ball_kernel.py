@@ -163,7 +163,8 @@ class BallKernel:
     no compiler works). ``"auto"`` picks simd when it can.
 
     The state of a shot is (x, y, u_x, u_y, slip_x, slip_y, status, time, hole x, hole y,
-    wall contacts, mid-point x, y) with status 0 while moving, 1 sunk, 2 out, 3 stopped; finished shots are frozen.
+    wall contacts, mid-point x, y) with status 0 while moving, 1 sunk, 2 out, 3 stopped;
+    finished shots are frozen.
     Between calls the finished shots are dropped, so a batch costs what its longest shot needs.
 
     Parameters
