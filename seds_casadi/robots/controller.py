@@ -14,13 +14,16 @@ the ball (from the simulation standing in for the sensors) and computes
    face's normal only;
 3. joint velocities by damped least squares, qdot = J_w^T (J_w J_w^T + lambda^2 I)^-1 w e,
    with task weights w (position before orientation) and, in the null space of the task, a
-   pull towards the home posture and away from joint limits (the WAM's redundancy); joint
-   velocities are scaled down together to respect the velocity limits, and the integrated
-   reference is kept inside the position limits;
+   pull towards the home posture and away from joint limits (the WAM's redundancy); over the
+   first 80 ms of a swing they are blended in from rest (:func:`~seds_casadi.robots.limits.
+   start_blend`: the arm starts at rest, the DS does not), then scaled down together to a
+   margin inside the velocity limits (so that the tracking error keeps the simulated arm
+   within them), and the integrated reference is kept inside the position limits;
 4. torques by inverse dynamics (RNEA) on the reference acceleration with PD feedback on the
    joint errors: tau = RNEA(q, qd, qdd_ref + Kp (q_ref - q) + Kd (qd_ref - qd)); when a torque
    would exceed its limit, the acceleration part is scaled down (gravity is always
-   compensated), so the limits hold unless gravity alone exceeds them.
+   compensated), so the limits hold unless gravity alone exceeds them (for arms whose
+   efforts exclude gravity, the Katana, the limit is on tau - g(q)).
 
 Steps 1-3 and the reference acceleration of step 4 are one CasADi Function compiled to C
 (:func:`tick_function`); the hit is detected by the motion's
@@ -40,6 +43,7 @@ from ..motion.hitting import HittingMotion, hitting_ds_sx
 from ..motion.resting import check_rest_mode, resting_system
 from ..motion.rollout import plane_crossing
 from .dynamics import gravity_ratio
+from .limits import START_BLEND, start_blend
 from .models import Robot
 from .orientation import face_orientation_sx, orientation_error_sx
 
@@ -103,20 +107,33 @@ class SwingController:
         limit (gravity and velocity terms are kept): the arm then lags its reference, which the
         closed-loop DS corrects. Without it, torques are whatever inverse dynamics asks for.
         None: on when the arm can hold its home posture against gravity within its effort
-        limits (the Katana's published efforts cannot: see ``robots/README.md``).
+        limits, and on arms whose efforts exclude gravity (the Katana: see
+        ``robots/README.md``).
+    blend_time : float
+        The commanded joint velocities are blended in from rest over this time [s]
+        (:func:`~seds_casadi.robots.limits.start_blend`; 0: no blending, a velocity step).
+    velocity_margin : float
+        The reference joint velocities are kept within this share of the velocity limits.
     """
 
     def __init__(self, robot: Robot, motion: HittingMotion, period: float = 0.002,
                  gains: Gains | None = None, rest_mode: str = "flat",
-                 hit_radius: float = 0.02, torque_limit: bool | None = None) -> None:
+                 hit_radius: float = 0.02, torque_limit: bool | None = None,
+                 blend_time: float = START_BLEND, velocity_margin: float = 0.95) -> None:
         if not (np.isfinite(period) and period > 0):
             raise ValueError(f"the control period must be positive, got {period}")
+        if not (np.isfinite(blend_time) and blend_time >= 0):
+            raise ValueError(f"blend_time must be >= 0 s, got {blend_time}")
+        if not (np.isfinite(velocity_margin) and 0 < velocity_margin <= 1):
+            raise ValueError(f"velocity_margin must be in (0, 1], got {velocity_margin}")
+        self.blend_time, self.velocity_margin = float(blend_time), float(velocity_margin)
         self.robot, self.motion, self.period = robot, motion, float(period)
         self.gains = gains or Gains.for_robot(robot)
         self.rest_mode = check_rest_mode(rest_mode)
         self.hit_radius = float(hit_radius)
         if torque_limit is None:
-            torque_limit = gravity_ratio(robot, robot.q_home) < 1.0
+            torque_limit = (robot.effort_excludes_gravity
+                            or gravity_ratio(robot, robot.q_home) < 1.0)
         self.torque_limit = bool(torque_limit)
         self._ds = motion.compiled()
         self._psi_cache = (np.nan, motion.commanded_direction(0.0))
@@ -137,6 +154,7 @@ class SwingController:
         self.hit = None
         self._rest = None
         self._prev = None
+        self._t0 = None
 
     def _psi(self, alpha: float) -> np.ndarray:
         """R_alpha psi* (cached for the last alpha: it rarely changes between ticks)."""
@@ -191,14 +209,17 @@ class SwingController:
         direction = self.hit["psi"] if self.hit is not None else self._psi(alpha)
         rest = ((self._rest[0].ravel(order="F"), self._rest[1]) if self._rest is not None
                 else self._zero_rest)
+        if self._t0 is None:
+            self._t0 = t
+        blend = float(start_blend(t - self._t0, self.blend_time))
         out = self._step(np.concatenate([
             q, qd, self.q_ref, self.qd_ref, M.translation, M.rotation.ravel(order="F"),
-            Jl.ravel(order="F"), target, (alpha, kappa, float(self._rest is not None)),
+            Jl.ravel(order="F"), target, (alpha, kappa, float(self._rest is not None), blend),
             rest[0], rest[1], direction, self._base_flat]))
         n = r.nv
         self.qd_ref, self.q_ref, a = out[:n], out[n:2 * n], out[2 * n:3 * n]
         tau = pin.rnea(r.model, r.data, q, qd, a).copy()
-        if self.torque_limit and np.any(np.abs(tau) > self._effort):
+        if self.torque_limit and (r.effort_excludes_gravity or np.any(np.abs(tau) > self._effort)):
             tau = self._limit_torque(q, qd, tau)
         return tau
 
@@ -209,17 +230,23 @@ class SwingController:
 
         r, eff = self.robot, self._effort
         bias = pin.rnea(r.model, r.data, q, qd, self._zeros)
+        # the torque that counts against the limits: tau, or tau - g(q) (efforts without gravity)
+        g = (pin.computeGeneralizedGravity(r.model, r.data, q) if r.effort_excludes_gravity
+             else self._zeros)
         d = tau - bias
-        over = np.abs(tau) > eff
-        # largest s in [0, 1] with |bias + s d| <= eff on the joints that are over
-        s = float(np.clip(np.min((np.sign(d[over]) * eff[over] - bias[over]) / d[over]),
+        load = bias - g
+        over = np.abs(load + d) > eff
+        if not over.any():
+            return tau
+        # largest s in [0, 1] with |load + s d| <= eff on the joints that are over
+        s = float(np.clip(np.min((np.sign(d[over]) * eff[over] - load[over]) / d[over]),
                           0.0, 1.0))
         return bias + s * d
 
 
-def _joint_velocities(ctl: SwingController, q, J, v, w):
+def _joint_velocities(ctl: SwingController, q, J, v, w, blend):
     """Step 3: damped least squares on the weighted task (v, w) with the null-space posture pull,
-    scaled to the velocity limits."""
+    blended in from rest (factor ``blend``) and scaled to a margin inside the velocity limits."""
     r, g = ctl.robot, ctl.gains
     W = ca.DM([1, 1, 1] + [g.orientation_weight] * 3)
     Jw = ca.diag(W) @ J
@@ -228,8 +255,8 @@ def _joint_velocities(ctl: SwingController, q, J, v, w):
     lo, hi = ca.DM(r.lower) + ca.DM(ctl._margin), ca.DM(r.upper) - ca.DM(ctl._margin)
     pull = g.posture_gain * (ca.DM(r.q_home) - q) + 5.0 * (ca.fmax(lo - q, 0) - ca.fmax(q - hi, 0))
     # qd = Jw^T (JJt)^-1 e + (I - Jw^T (JJt)^-1 Jw) pull = pull + Jw^T (JJt)^-1 (e - Jw pull)
-    qd_new = pull + Jw.T @ ca.solve(JJt, e - Jw @ pull)
-    vlim = ca.DM(np.where(r.velocity_limit > 0, r.velocity_limit, 1e9))
+    qd_new = blend * (pull + Jw.T @ ca.solve(JJt, e - Jw @ pull))
+    vlim = ca.DM(np.where(r.velocity_limit > 0, ctl.velocity_margin * r.velocity_limit, 1e9))
     scale = ca.mmax(ca.fabs(qd_new) / vlim)
     return qd_new / ca.fmax(scale, 1.0)
 
@@ -244,6 +271,7 @@ def tick_function(ctl: SwingController) -> ca.Function:
     J_loc = ca.SX.sym("J", 6, n)
     target, alpha, kappa, resting = (ca.SX.sym("target", 3), ca.SX.sym("alpha"),
                                      ca.SX.sym("kappa"), ca.SX.sym("resting"))
+    blend = ca.SX.sym("blend")
     A, rest, direction = ca.SX.sym("A", 3, 3), ca.SX.sym("rest", 3), ca.SX.sym("dir", 3)
     # the base placement is an input, so that one compiled tick serves any placement
     Rb, pb = ca.SX.sym("Rb", 3, 3), ca.SX.sym("pb", 3)
@@ -253,7 +281,7 @@ def tick_function(ctl: SwingController) -> ca.Function:
     v_ds = hitting_ds_sx(x - target, alpha, kappa, ctl.motion.target_field, ctl.motion.strength)
     v = ca.if_else(resting > 0.5, A @ (x - rest), v_ds)
     w = orientation_error_sx(R, face_orientation_sx(direction), n >= 6)
-    qd_new = _joint_velocities(ctl, q, J, v, w)
+    qd_new = _joint_velocities(ctl, q, J, v, w, blend)
     lower, upper = ca.DM(r.lower), ca.DM(r.upper)
     qdd_ref = (qd_new - qd_ref) / ctl.period
     q_next = ca.fmin(ca.fmax(q_ref + ctl.period * qd_new, lower), upper)
@@ -261,8 +289,8 @@ def tick_function(ctl: SwingController) -> ca.Function:
     q_next = q + ca.fmin(ca.fmax(q_next - q, -0.05), 0.05)
     wn = g.kp
     acc = qdd_ref + wn * wn * (q_next - q) + 2 * g.kd * wn * (qd_new - qd)
-    parts = [q, qd, q_ref, qd_ref, p_loc, R_loc, J_loc, target, alpha, kappa, resting, A, rest,
-             direction, Rb, pb]
+    parts = [q, qd, q_ref, qd_ref, p_loc, R_loc, J_loc, target, alpha, kappa, resting, blend,
+             A, rest, direction, Rb, pb]
     flat = ca.vertcat(*[ca.vec(s) for s in parts])
     # one packed input: a Python call then copies one array, not fourteen
     z = ca.SX.sym("z", flat.numel())

@@ -19,6 +19,7 @@ from ..motion.rollout import Perturbations
 from ..motion.rotation import rotation_z
 from .controller import Gains, SwingController
 from .dynamics import effective_mass
+from .limits import limit_report
 from .models import Robot
 from .placement import place_head
 
@@ -42,9 +43,18 @@ class SwingResult:
     commanded : array (3,)
         kappa v* R_alpha psi*.
     peak_torque_ratio : float
-        max |tau_i| / effort_i over the swing.
+        max |tau_i| / effort_i over the swing (tau_i - g_i(q) for arms whose efforts exclude
+        gravity, the Katana).
     limits_ok : bool
         Joint positions stayed within their limits.
+    peak_speed, peak_torque : array (nv,)
+        Largest |qd_i| [rad/s] and |tau_i| [N m] (as counted against the efforts) over the
+        simulated swing.
+    speed_ratio, torque_ratio : array (nv,)
+        The same against each joint's velocity limit and effort.
+    limits_broken : list of str
+        Every limit the simulated arm broke (speed, torque, position), by joint; empty for a
+        swing within its limits (:attr:`within_limits`).
     tick_us : array (n,)
         Wall time of each control tick [us] (the controller only, not the simulation).
     face_normal : array (3,)
@@ -69,6 +79,16 @@ class SwingResult:
     tick_us: np.ndarray = field(default_factory=lambda: np.zeros(0))
     face_normal: np.ndarray = field(default_factory=lambda: np.full(3, np.nan))
     effective_mass: float = np.nan
+    peak_speed: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    peak_torque: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    speed_ratio: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    torque_ratio: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    limits_broken: list = field(default_factory=list)
+
+    @property
+    def within_limits(self) -> bool:
+        """No joint over its velocity, torque or position limit at any tick."""
+        return not self.limits_broken
 
     @property
     def direction_error_deg(self) -> float:
@@ -138,14 +158,16 @@ class _SwingLog:
                        "mass": effective_mass(robot, q, normal)}
 
     def result(self, robot: Robot, ctl: SwingController) -> SwingResult:
-        tau, Q = np.array(self.TAU), np.array(self.Q)
-        eff = np.where(robot.effort > 0, robot.effort, np.inf)
-        res = SwingResult(np.array(self.T), Q, np.array(self.QD), tau, np.array(self.X),
+        tau, Q, QD = np.array(self.TAU), np.array(self.Q), np.array(self.QD)
+        lim = limit_report(robot, Q, QD, tau)
+        res = SwingResult(np.array(self.T), Q, QD, tau, np.array(self.X),
                           ctl.hit is not None,
-                          peak_torque_ratio=float(np.max(np.abs(tau) / eff)),
+                          peak_torque_ratio=float(np.max(lim["torque_ratio"])),
                           limits_ok=bool(np.all(Q >= robot.lower - 1e-6)
                                          and np.all(Q <= robot.upper + 1e-6)),
-                          tick_us=np.array(self.TICK) / 1e3)
+                          tick_us=np.array(self.TICK) / 1e3, peak_speed=lim["peak_speed"],
+                          peak_torque=lim["peak_torque"], speed_ratio=lim["speed_ratio"],
+                          torque_ratio=lim["torque_ratio"], limits_broken=lim["broken"])
         if ctl.hit is not None:
             res.hit_time = ctl.hit["t"]
             res.hit_velocity = self.at_hit["velocity"]
