@@ -76,6 +76,9 @@ def main():
               f"{step.max():.3f} rad/s")
         print(f"  direction error at the hit [deg]: median {np.median(dirs):.3f}, "
               f"max {dirs.max():.3f}")
+        spd = np.array([s.speed_error for s in hits])
+        print(f"  speed error at the hit: median {100 * np.median(spd):.2f} %, "
+              f"max {100 * spd.max():.2f} %")
         print(f"  launch direction error (face normal) [deg]: median {np.median(face):.3f}, "
               f"max {face.max():.3f}")
         print(f"  control tick: median {np.median(ticks):.1f} us")

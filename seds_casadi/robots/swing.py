@@ -177,6 +177,30 @@ class _SwingLog:
         return res
 
 
+def _check_swing_inputs(ball, alpha, kappa, period, substeps, max_time, rest_time, hole):
+    """ValueError naming a bad input of :func:`simulate_swing`; the ball and hole as arrays."""
+    b = np.asarray(ball, float).copy()
+    if b.shape != (3,) or not np.all(np.isfinite(b)):
+        raise ValueError(f"ball must be a finite 3-vector (x, y, z) in the field frame, got "
+                         f"{np.asarray(ball).tolist()}")
+    if not np.isfinite(alpha):
+        raise ValueError(f"alpha must be a finite angle in radians, got {alpha}")
+    if not (np.isfinite(kappa) and kappa > 0):
+        raise ValueError(f"kappa (the speed gain) must be positive and finite, got {kappa}; "
+                         "it scales the hitting speed, so 0 or less would not swing forwards")
+    for name, v in (("period", period), ("max_time", max_time)):
+        if not (np.isfinite(v) and v > 0):
+            raise ValueError(f"{name} must be positive [s], got {v}")
+    if not (np.isfinite(rest_time) and rest_time >= 0):
+        raise ValueError(f"rest_time must be >= 0 s, got {rest_time}")
+    if int(substeps) != substeps or substeps < 1:
+        raise ValueError(f"substeps must be a positive integer, got {substeps}")
+    h = None if hole is None else np.asarray(hole, float).copy()
+    if h is not None and (h.shape not in ((2,), (3,)) or not np.all(np.isfinite(h))):
+        raise ValueError(f"hole must be a finite (x, y) or (x, y, z), got {np.asarray(hole)}")
+    return b, h
+
+
 def simulate_swing(robot: Robot, motion: HittingMotion, ball, alpha: float = 0.0,
                    kappa: float = 1.0, start=None, period: float = 0.002, substeps: int = 4,
                    max_time: float = 3.0, rest_time: float = 0.4, gains: Gains | None = None,
@@ -211,8 +235,8 @@ def simulate_swing(robot: Robot, motion: HittingMotion, ball, alpha: float = 0.0
         hole (e.g. a hitting-parameter model on the situation hole - ball); overrides
         ``alpha`` and ``kappa``.
     """
-    ball = np.asarray(ball, float).copy()
-    hole = None if hole is None else np.asarray(hole, float).copy()
+    ball, hole = _check_swing_inputs(ball, alpha, kappa, period, substeps, max_time,
+                                     rest_time, hole)
     robot.check_reach(ball)
     events = Perturbations(perturb, ("ball", "hole"))
     if params is not None:
@@ -234,6 +258,9 @@ def simulate_swing(robot: Robot, motion: HittingMotion, ball, alpha: float = 0.0
                 hole = np.asarray(e["hole"], float).copy()
         if params is not None and ctl.hit is None:
             alpha, kappa = (float(v) for v in params(t, ball.copy(), hole))
+            if not (np.isfinite(alpha) and np.isfinite(kappa) and kappa > 0):
+                raise ValueError(f"params returned alpha {alpha}, kappa {kappa} at t = {t:.3f}"
+                                 " s: a finite alpha and a positive kappa are needed")
         had_hit = ctl.hit is not None
         t0 = time.perf_counter_ns()
         tau = ctl.tick(q, qd, ball, alpha, kappa, t)
