@@ -11,7 +11,7 @@ error (the face's normal, along which the ball leaves, against the commanded dir
 the median control tick.
 
 Usage: python benchmarks/eval_swing_limits.py [-n 50] [--robots wam katana] [--field flat]
-       [--seed 0] [--ik dls|qp]
+       [--seed 0] [--ik dls|qp] [--no-cartesian-limit]
 """
 
 from __future__ import annotations
@@ -49,12 +49,19 @@ def main():
     ap.add_argument("--robots", nargs="+", default=["wam", "katana"])
     ap.add_argument("--field", default="flat")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--ik", default="dls", choices=["dls", "qp"])
+    ap.add_argument("--no-cartesian-limit", action="store_true",
+                    help="no speed limit on the elbow and the wrist centre")
     args = ap.parse_args()
+    ctl = {"ik": args.ik}
+    if args.no_cartesian_limit:
+        ctl["cartesian_speed_limit"] = None
     motion = HittingMotion.fit(load_hitting_demos(), n_components=3)
     field = load_field(args.field)
     for name in args.robots:
         t0 = time.perf_counter()
-        sw = _swings(name, motion, field, args.n, np.random.default_rng(args.seed))
+        sw = _swings(name, motion, field, args.n, np.random.default_rng(args.seed),
+                     controller=ctl)
         speed = np.array([s.speed_ratio for _, s in sw])
         torque = np.array([s.torque_ratio for _, s in sw])
         broken = sum(not s.within_limits for _, s in sw)

@@ -205,7 +205,7 @@ def simulate_swing(robot: Robot, motion: HittingMotion, ball, alpha: float = 0.0
                    kappa: float = 1.0, start=None, period: float = 0.002, substeps: int = 4,
                    max_time: float = 3.0, rest_time: float = 0.4, gains: Gains | None = None,
                    perturb=None, rest_mode: str = "flat", hole=None,
-                   params=None) -> SwingResult:
+                   params=None, controller: dict | None = None) -> SwingResult:
     """Swing at the ball with the 500 Hz controller on the robot's forward dynamics.
 
     Parameters
@@ -234,6 +234,10 @@ def simulate_swing(robot: Robot, motion: HittingMotion, ball, alpha: float = 0.0
         :meth:`HittingMotion.rollout`'s, evaluated every tick from the current time, ball and
         hole (e.g. a hitting-parameter model on the situation hole - ball); overrides
         ``alpha`` and ``kappa``.
+    controller : dict, optional
+        Further options of :class:`~seds_casadi.robots.controller.SwingController`, e.g.
+        ``{"ik": "qp"}`` (limits as QP constraints), ``{"cartesian_speed_limit": None}`` or
+        ``{"blend_time": 0.0}`` (no start from rest: the velocity step of before).
     """
     ball, hole = _check_swing_inputs(ball, alpha, kappa, period, substeps, max_time,
                                      rest_time, hole)
@@ -243,7 +247,7 @@ def simulate_swing(robot: Robot, motion: HittingMotion, ball, alpha: float = 0.0
         alpha, kappa = (float(v) for v in params(0.0, ball.copy(), hole))
     if start is None:
         start = rotation_z(alpha) @ np.array([-0.3, 0.0, 0.05])
-    ctl = SwingController(robot, motion, period, gains, rest_mode)
+    ctl = SwingController(robot, motion, period, gains, rest_mode, **(controller or {}))
     q = place_head(robot, ctl.contact_point(ball, alpha) + np.asarray(start, float),
                    motion.commanded_direction(alpha))
     qd = np.zeros(robot.nv)
