@@ -52,7 +52,7 @@ from .ik import (
     qp_terms,
     speed_points,
 )
-from .limits import START_BLEND, start_blend
+from .limits import START_BLEND, start_blend_scalar
 from .models import Robot
 from .orientation import face_orientation_sx, orientation_error_sx
 
@@ -244,7 +244,8 @@ class SwingController:
                 else self._zero_rest)
         if self._t0 is None:
             self._t0 = t
-        blend = float(start_blend(t - self._t0, self.blend_time))
+        s = (t - self._t0) / self.blend_time if self.blend_time > 0 else 1.0
+        blend = 1.0 if s >= 1.0 else start_blend_scalar(max(s, 0.0))
         Jp = (np.vstack([j.reshape(3, -1, order="F") for j in Jp]).ravel(order="F") if Jp
               else ())
         out = self._step(np.concatenate([

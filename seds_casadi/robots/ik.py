@@ -78,8 +78,8 @@ def qp_terms(ctl, q, q_ref, J, v, w):
 
 def limit_velocities(ctl, qd, J_points, blend):
     """Blend ``qd`` in from rest (factor ``blend``) and scale it down together so that every
-    joint stays within the velocity limits (times the margin) and the elbow and wrist centre
-    (``J_points``: their stacked 3 x n Jacobians) within the Cartesian speed limit, SX."""
+    joint stays within the velocity limits and the elbow and wrist centre (``J_points``: their
+    stacked 3 x n Jacobians) within the Cartesian speed limit (both times the margin), SX."""
     r = ctl.robot
     qd = blend * qd
     vlim = ca.DM(np.where(r.velocity_limit > 0, ctl.velocity_margin * r.velocity_limit, 1e9))
@@ -87,7 +87,7 @@ def limit_velocities(ctl, qd, J_points, blend):
     if ctl.cartesian_speed_limit is not None:
         for k in range(J_points.shape[0] // 3):
             speed = ca.norm_2(J_points[3 * k:3 * k + 3, :] @ qd)
-            scale = ca.fmax(scale, speed / ctl.cartesian_speed_limit)
+            scale = ca.fmax(scale, speed / (ctl.velocity_margin * ctl.cartesian_speed_limit))
     return qd / ca.fmax(scale, 1.0)
 
 

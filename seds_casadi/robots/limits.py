@@ -14,7 +14,7 @@ import numpy as np
 
 from .models import Robot
 
-__all__ = ["START_BLEND", "start_blend", "limit_report", "torque_load"]
+__all__ = ["START_BLEND", "start_blend", "start_blend_scalar", "limit_report", "torque_load"]
 
 #: duration of the start-from-rest blending [s]
 START_BLEND = 0.08
@@ -27,6 +27,11 @@ def start_blend(t, duration: float = START_BLEND):
         return np.ones_like(np.asarray(t, float))
     s = np.clip(np.asarray(t, float) / duration, 0.0, 1.0)
     return s**3 * (10 - 15 * s + 6 * s * s)
+
+
+def start_blend_scalar(s: float) -> float:
+    """:func:`start_blend` at the fraction s in [0, 1] of the blending (a float, for the tick)."""
+    return s * s * s * (10.0 - 15.0 * s + 6.0 * s * s)
 
 
 def torque_load(robot: Robot, q: np.ndarray, tau: np.ndarray) -> np.ndarray:
