@@ -233,8 +233,8 @@ class SwingController:
         pin.updateFramePlacements(model, data)
         M = data.oMf[r.head_frame]
         Jl = pin.getFrameJacobian(model, data, r.head_frame, pin.LOCAL_WORLD_ALIGNED)
-        Jp = [pin.getJointJacobian(model, data, j, pin.LOCAL_WORLD_ALIGNED)[:3].ravel(order="F")
-              for j in self._points]
+        Jp = (np.vstack([pin.getJointJacobian(model, data, j, pin.LOCAL_WORLD_ALIGNED)[:3]
+                         for j in self._points]).ravel(order="F") if self._points else ())
         Rb, pb = self._base
         x = Rb @ M.translation + pb
         target = self.contact_point(ball, alpha)
@@ -246,8 +246,6 @@ class SwingController:
             self._t0 = t
         s = (t - self._t0) / self.blend_time if self.blend_time > 0 else 1.0
         blend = 1.0 if s >= 1.0 else start_blend_scalar(max(s, 0.0))
-        Jp = (np.vstack([j.reshape(3, -1, order="F") for j in Jp]).ravel(order="F") if Jp
-              else ())
         out = self._step(np.concatenate([
             q, qd, self.q_ref, self.qd_ref, M.translation, M.rotation.ravel(order="F"),
             Jl.ravel(order="F"), Jp, target, (alpha, kappa, float(self._rest is not None),
@@ -256,20 +254,23 @@ class SwingController:
         n = r.nv
         self.qd_ref, self.q_ref, a = out[:n], out[n:2 * n], out[2 * n:3 * n]
         tau = pin.rnea(r.model, r.data, q, qd, a).copy()
-        if self.torque_limit and (r.effort_excludes_gravity or np.any(np.abs(tau) > self._effort)):
-            tau = self._limit_torque(q, qd, tau)
+        if not self.torque_limit:
+            return tau
+        # the torque that counts against the limits: tau, or tau - g(q) (efforts without gravity)
+        g = (pin.computeGeneralizedGravity(r.model, r.data, q) if r.effort_excludes_gravity
+             else self._zeros)
+        if np.any(np.abs(tau - g) > self._effort):
+            tau = self._limit_torque(q, qd, tau, g)
         return tau
 
-    def _limit_torque(self, q, qd, tau) -> np.ndarray:
+    def _limit_torque(self, q, qd, tau, g) -> np.ndarray:
         """Torque-limited computed torque: scale the commanded acceleration (not gravity and
-        velocity terms) until every joint is within its effort limit."""
+        velocity terms) until every joint's |tau - g| is within its effort limit (g: gravity
+        for arms whose efforts exclude it, else zero)."""
         import pinocchio as pin
 
         r, eff = self.robot, self._effort
         bias = pin.rnea(r.model, r.data, q, qd, self._zeros)
-        # the torque that counts against the limits: tau, or tau - g(q) (efforts without gravity)
-        g = (pin.computeGeneralizedGravity(r.model, r.data, q) if r.effort_excludes_gravity
-             else self._zeros)
         d = tau - bias
         load = bias - g
         over = np.abs(load + d) > eff
