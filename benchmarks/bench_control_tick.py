@@ -5,6 +5,7 @@ torque saturations of a real swing), with its parts timed beside it.
 Target from the issue: median at most 50 us (40x inside the 2 ms period).
 
 Usage: python benchmarks/bench_control_tick.py [--robots wam katana panda] [--swings 5]
+       [--ik dls|qp]
 """
 
 from __future__ import annotations
@@ -32,6 +33,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--robots", nargs="+", default=["wam", "katana", "panda"])
     ap.add_argument("--swings", type=int, default=5)
+    ap.add_argument("--ik", default="dls", choices=["dls", "qp"],
+                    help="damped least squares (default) or the QP with the limits")
     args = ap.parse_args()
     motion = HittingMotion.fit(load_hitting_demos(), n_components=3)
     ds = motion.compiled()
@@ -46,7 +49,8 @@ def main():
         ticks = []
         for i in range(args.swings):
             ball = np.array([0.0, -0.04 * i, 0.02135])
-            ticks.append(simulate_swing(r, motion, ball, 0.03 * i, kappa).tick_us[1:])
+            ticks.append(simulate_swing(r, motion, ball, 0.03 * i, kappa,
+                                        controller={"ik": args.ik}).tick_us[1:])
         ticks = np.concatenate(ticks)
         q, qd = r.q_home, np.full(r.nv, 0.1)
         t_kin = timeit(lambda r=r, q=q: (r.head_pose(q), r.head_jacobian(q)))

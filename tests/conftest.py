@@ -56,7 +56,7 @@ def curved_demos_3d() -> Demonstrations:
 # several seconds: end-to-end runs, Dask clusters, 50-swing acceptance figures).
 SLOW_MODULES = {"test_examples.py", "test_play.py", "test_validation.py",
                 "test_robots_control.py", "test_cli_and_lasa.py", "test_readme.py",
-                "test_replay.py", "test_validate_workers.py"}
+                "test_replay.py", "test_validate_workers.py", "test_swing_limits.py"}
 SLOW_TESTS = {
     "test_fifty_random_swings_hit_within_one_degree_and_two_percent",
     "test_a_badly_lined_up_fit_is_refitted_and_reported",

@@ -249,10 +249,11 @@ def log3(R):
 
 
 def orientation_error(R, Rd, full):
-    """log(Rd R^T), or R_x cross Rd_x (the face's normal only)."""
+    """log(Rd R^T), or the turn about z from R_x's horizontal direction to Rd_x's."""
     if full:
         return log3(Rd @ R.T)
-    return np.cross(R[:, 0], Rd[:, 0])
+    a = np.arctan2(Rd[1, 0], Rd[0, 0]) - np.arctan2(R[1, 0], R[0, 0])
+    return np.array([0.0, 0.0, (a + np.pi) % (2 * np.pi) - np.pi])
 
 
 def face_orientation(direction):

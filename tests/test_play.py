@@ -38,8 +38,8 @@ def test_play_quick_writes_shots_summary_figures_and_models(quick_run):
     # every column with a unit names it; the hitting angle is in degrees like the learners'
     assert SHOT_COLUMNS == ("method", "shot", "ball_x_m", "ball_y_m", "hole_x_m", "hole_y_m",
                             "alpha_deg", "kappa", "hit", "sunk", "direction_error_deg",
-                            "speed_error", "final_x_m", "final_y_m", "sunk_exudyn",
-                            "strategy")
+                            "speed_error", "launch_direction_error_deg", "within_limits",
+                            "final_x_m", "final_y_m", "sunk_exudyn", "strategy")
     assert {row["method"] for row in rows} == {"gpr", "gmr"} and len(rows) == 6
     for row in rows:
         assert row["hit"] in ("True", "False") and row["sunk"] in ("True", "False")
@@ -50,6 +50,10 @@ def test_play_quick_writes_shots_summary_figures_and_models(quick_run):
     hit = [row for row in rows if row["hit"] == "True"]
     assert hit and all(float(row["direction_error_deg"]) < 2 for row in hit)
     assert all(float(row["speed_error"]) < 0.05 for row in hit)
+    # the ball leaves within 1 deg of the commanded direction (the face), within the limits
+    assert all(float(row["launch_direction_error_deg"]) < 1 for row in hit)
+    assert all(row["within_limits"] == "True" for row in rows)
+    assert "launch direction (face) error max" in (out / "summary.txt").read_text()
     assert sum(row["sunk_exudyn"] != "" for row in rows) == 1
     summary = (out / "summary.txt").read_text()
     assert "gpr:" in summary and "time per stage" in summary

@@ -46,10 +46,14 @@ __all__ = ["play", "play_shot", "PlayConfig", "SHOT_COLUMNS", "LEARNERS"]
 _LOG = logging.getLogger(__name__)
 
 #: columns of ``shots.csv``; a unit ends the name (m, deg), dimensionless ones have none
-#: (kappa, the gain; speed_error, relative to the commanded speed)
+#: (kappa, the gain; speed_error, relative to the commanded speed). direction_error_deg is the
+#: club velocity's error at the hit, launch_direction_error_deg the club face's (the ball
+#: leaves along the face's normal); within_limits: no joint over a speed, torque or position
+#: limit during the swing
 SHOT_COLUMNS = ("method", "shot", "ball_x_m", "ball_y_m", "hole_x_m", "hole_y_m", "alpha_deg",
-                "kappa", "hit", "sunk", "direction_error_deg", "speed_error", "final_x_m",
-                "final_y_m", "sunk_exudyn", "strategy")
+                "kappa", "hit", "sunk", "direction_error_deg", "speed_error",
+                "launch_direction_error_deg", "within_limits", "final_x_m", "final_y_m",
+                "sunk_exudyn", "strategy")
 LEARNERS = ("gpr", "gmr")
 _VALID_LEARNERS = ("gpr", "gmr", "sep_gmr")
 
@@ -184,6 +188,7 @@ def play_shot(task: dict) -> dict:
            "ball_y_m": ball[1], "hole_x_m": hole[0], "hole_y_m": hole[1],
            "alpha_deg": float(np.rad2deg(task["alpha"])), "kappa": task["kappa"], "hit": False,
            "sunk": False, "direction_error_deg": np.nan, "speed_error": np.nan,
+           "launch_direction_error_deg": np.nan, "within_limits": "",
            "final_x_m": ball[0], "final_y_m": ball[1], "sunk_exudyn": ""}
     try:
         swing = simulate_swing(robot, motion, np.array([ball[0], ball[1], z]), task["alpha"],
@@ -191,6 +196,7 @@ def play_shot(task: dict) -> dict:
     except ValueError as exc:  # out of reach, no start configuration: a miss, with the reason
         row["error"] = str(exc)
         return row
+    row["within_limits"] = swing.within_limits
     if not swing.hit:
         if task.get("keep_swing"):
             row["swing"] = swing
@@ -200,6 +206,7 @@ def play_shot(task: dict) -> dict:
     res = simulate_shots(field, ball[None], launch, hole=hole, engine="numpy", record_paths=True)
     row.update(hit=True, sunk=bool(res.sunk[0]),
                direction_error_deg=swing.direction_error_deg, speed_error=swing.speed_error,
+               launch_direction_error_deg=swing.face_error_deg,
                final_x_m=float(res.final_position[0, 0]),
                final_y_m=float(res.final_position[0, 1]), path=res.paths[0])
     if task.get("keep_swing"):  # for a replay (seds_casadi.app.replay)
@@ -387,6 +394,13 @@ def _summary(cfg: PlayConfig, fld, rows: list[dict], n_situations: int, times: d
             rk = [r for r in mine if r["strategy"] == k]
             lines.append(f"    strategy {k}: played {len(rk)} times, "
                          f"{np.mean([r['sunk'] for r in rk]):.0%} sunk")
+    hit = [r for r in rows if r["hit"]]
+    if hit:
+        lines.append("  at the hit: club direction error max "
+                     f"{max(r['direction_error_deg'] for r in hit):.2f} deg, launch direction "
+                     f"(face) error max {max(r['launch_direction_error_deg'] for r in hit):.2f}"
+                     f" deg; {sum(r['within_limits'] is True for r in rows)} of {len(rows)} "
+                     "swings within the arm's limits")
     if checked:
         agree = np.mean([r["sunk"] == r["sunk_exudyn"] for r in checked])
         lines.append(f"  exudyn agreed with the ball model on {agree:.0%} of "

@@ -9,9 +9,10 @@ Model (per unit mass; horizontal position p = (x, y), horizontal velocity u; g =
 
   which conserves (7/10)|v|^2 + g H without resistance (|v|^2 = |u|^2 + (grad(H).u)^2) and gives
   (5/7) g sin(theta) along an inclined plane.
-* **Rolling resistance.** A deceleration (5/7) rho g along the surface velocity (rho from the
-  field's Stimpmeter reading, times the field's local friction factor), projected on the
-  horizontal plane.
+* **Rolling resistance.** A deceleration (5/7) rho g cos(theta) along the surface velocity
+  (rho from the field's Stimpmeter reading, times the field's local friction factor), projected
+  on the horizontal plane; the normal force per unit mass is g cos(theta) (cos(theta) =
+  1 / sqrt(1 + |grad(H)|^2)), and sliding friction mu_k g cos(theta) scales with it too.
 * **Skid after the impact.** A struck ball has no spin: its contact point slips at the ball's
   velocity. Kinetic friction mu_k g (mu_k = 0.2) acts against the slip, which therefore falls at
   (7/2) mu_k g (gravity's full tangential part acts on both); the ball rolls once the slip is
@@ -30,9 +31,15 @@ Model (per unit mass; horizontal position p = (x, y), horizontal velocity u; g =
 * **Impact** (club head to ball, along the club's velocity): v_ball = (1 + e) m_c / (m_c + m_b)
   v_club, with an effective club-head mass m_c = 0.35 kg and restitution e = 0.8 (a putter face).
 
-Integration: a fixed step (default 10 ms): velocity by explicit Euler, position by the trapezoid
-rule (exact for a constant deceleration), the hole test on the step's segment so that a fast
-ball cannot jump over it.
+Integration: a fixed step (default 10 ms), drift-kick-drift: the surface read at the step's
+mid-point, the velocity kicked by the acceleration there, the position advanced by the trapezoid
+rule (exact for a constant deceleration). Second order and time-symmetric, so that the energy
+(7/10)|v|^2 + g H stays put without resistance (1e-5 of a 10 cm bowl's depth energy over 10 s;
+the explicit Euler step used before gained 16 %). Steps are split on strongly curved surfaces
+(:func:`substeps`), and a field whose surface curves more tightly than the ball's radius is
+refused at load time (:meth:`~seds_casadi.minigolf.surface.Surface.extremes`), so that the step
+stays finite on every surface a field file can describe. The hole test runs on the step's
+segment so that a fast ball cannot jump over it.
 
 Two engines share exactly these equations: ``"numpy"``, the readable reference here (also
 records paths), and ``"compiled"``, the same step written in CasADi and run in C over many shots
@@ -55,7 +62,7 @@ from .fields import Field
 # BallKernel and ball_kernel, the compiled engine, live in ball_kernel (which imports this
 # module) and can be imported from here too (module __getattr__ below)
 __all__ = ["BALL_MASS", "BALL_RADIUS", "G", "impact", "capture_speed", "simulate_shots",
-           "ShotResult"]
+           "ShotResult", "substeps"]
 
 MU_SLIDE = 0.2
 CLUB_MASS = 0.35
@@ -124,26 +131,6 @@ class ShotResult:
         return float(np.mean(self.sunk))
 
 
-def _rolling_acc(field: Field, P, U, slide):
-    """Surface terms of one step: the gravity acceleration (blended between sliding and
-    rolling by ``slide``), the full (sliding) one, the velocity's unit vector and the rolling
-    resistance's magnitude."""
-    s = field.surface
-    grad = s.gradient(P)
-    hess = s.hessian(P)
-    curv = np.einsum("ni,nij,nj->n", U, hess, U)
-    s2 = 1.0 + np.sum(grad * grad, axis=1)
-    # slide: fraction of the step still sliding (0 rolling, 1 sliding; in between at the
-    # transition, so that the speed at the end of that step is exact on flat ground)
-    full = -((G + curv) / s2)[:, None] * grad
-    acc = -(((5.0 / 7.0 + (2.0 / 7.0) * slide) * G + curv) / s2)[:, None] * grad
-    vs = np.sqrt(np.sum(U * U, axis=1) + np.sum(grad * U, axis=1) ** 2)
-    unit = U / np.maximum(vs, 1e-12)[:, None]
-    resist = (1 - slide) * (5.0 / 7.0) * field.rolling_resistance \
-        * field.surface.friction_factor(P) * G
-    return acc, full, unit, resist
-
-
 def simulate_shots(field: Field, ball_xy, launch_velocity, dt: float = 0.01,
                    max_time: float = 20.0, record_paths: bool = False,
                    engine: str = "auto", hole=None) -> ShotResult:
@@ -157,7 +144,7 @@ def simulate_shots(field: Field, ball_xy, launch_velocity, dt: float = 0.01,
     launch_velocity : array, shape (n, 2) or (2,)
         Ball velocities just after the impact (see :func:`impact`), horizontal [m/s].
     dt : float
-        Step [s].
+        Step [s]; split into :func:`substeps` on strongly curved surfaces.
     max_time : float
         Time limit [s]; shots still moving then are neither sunk nor stopped.
     record_paths : bool
@@ -185,11 +172,30 @@ def simulate_shots(field: Field, ball_xy, launch_velocity, dt: float = 0.01,
     if not (np.isfinite(dt) and dt > 0 and np.isfinite(max_time) and max_time > 0):
         raise ValueError("dt and max_time must be positive")
     Hh = _holes(field, hole, len(P))
+    dt = dt / substeps(field, U, dt)
     if engine == "compiled":
         from .ball_kernel import ball_kernel
 
         return ball_kernel(field, dt).run(P, U, max_time, Hh)
     return _simulate_numpy(field, P, U, Hh, dt, max_time, record_paths)
+
+
+#: largest turn of the velocity by the surface's curvature within one step [rad]
+MAX_TURN = 0.25
+
+
+def substeps(field: Field, launch_velocity, dt: float) -> int:
+    """Steps per ``dt`` that keep the step stable on the field's surface (step control).
+
+    A ball at speed v on a surface of curvature kappa turns by about kappa v dt per step; the
+    step is split so that this stays below :data:`MAX_TURN` for the fastest ball the shots can
+    give (launch speed along the surface, plus the field's whole drop). 1 on the shipped fields
+    at play's speeds; the surface's curvature is bounded at load time (below 1 / ball radius).
+    """
+    ext = field.surface.extremes(field.bounds)
+    u2 = float(np.max(np.sum(np.square(launch_velocity), axis=-1), initial=0.0))
+    v = np.sqrt(u2 * (1 + ext["slope"] ** 2) + 2 * G * ext["height_range"])
+    return max(1, int(np.ceil(dt * ext["curvature"] * v / MAX_TURN)))
 
 
 def _choose_engine(engine: str, record_paths: bool, ball_xy) -> str:
@@ -267,22 +273,43 @@ def _simulate_numpy(field: Field, P: np.ndarray, U: np.ndarray, Hh: np.ndarray, 
 
 def _step(field: Field, p, u, s, dt: float):
     """One step of the shots at p with velocities u and slips s, each (m, 2): the new
-    position, velocity and slip (before the boundary), and which balls are at rest."""
-    mg = MU_SLIDE * G
-    s_mag = np.linalg.norm(s, axis=1)
-    # sliding friction acts against the slip, which falls at (7/2) mu g (plus gravity)
-    slide = np.clip(s_mag / (3.5 * mg * dt), 0.0, 1.0)
+    position, velocity and slip (before the boundary), and which balls are at rest.
+
+    Drift-kick-drift (position Verlet): the surface is read half-way, at p + u dt/2, the
+    velocity-dependent curvature term u^T Hess(H) u at a predicted mid-step velocity, and the
+    position advances by the trapezoid rule (exact for a constant deceleration). Second order,
+    time-symmetric: energy stays within 1e-5 of the depth energy over 10 s in a frictionless
+    bowl at 10 ms (explicit Euler gained 16 %)."""
+    mid = p + 0.5 * dt * u
+    surf = field.surface
+    grad, hess, fr = surf.gradient(mid), surf.hessian(mid), surf.friction_factor(mid)
+    s2 = 1.0 + np.sum(grad * grad, axis=1)
+    cos = 1.0 / np.sqrt(s2)  # cos(theta): normal force, friction, resistance scale with it
+    fric = MU_SLIDE * G * cos
+    s_mag = np.sqrt(np.sum(s * s, axis=1) + np.sum(grad * s, axis=1) ** 2)  # along the surface
+    # sliding friction acts against the slip, which falls at (7/2) mu g cos(theta) (plus
+    # gravity); slide: fraction of the step still sliding (0 rolling, 1 sliding; in between at
+    # the transition, so that the speed at the end of that step is exact on flat ground)
+    slide = np.clip(s_mag / (3.5 * fric * dt), 0.0, 1.0)
     rolling = slide <= 0
     s_hat = s / np.maximum(s_mag, 1e-12)[:, None]
-    acc, full, unit, resist = _rolling_acc(field, p, u, slide)
+    k = (5.0 / 7.0 + (2.0 / 7.0) * slide) * G
+    a0 = -((k + np.einsum("ni,nij,nj->n", u, hess, u)) / s2)[:, None] * grad
+    um = u + 0.5 * dt * a0
+    curv = np.einsum("ni,nij,nj->n", um, hess, um)
+    acc = -((k + curv) / s2)[:, None] * grad
+    full = -((G + curv) / s2)[:, None] * grad
+    vs = np.sqrt(np.sum(um * um, axis=1) + np.sum(grad * um, axis=1) ** 2)
+    unit = um / np.maximum(vs, 1e-12)[:, None]
+    resist = (1 - slide) * (5.0 / 7.0) * field.rolling_resistance * fr * G * cos
     speed = np.linalg.norm(u, axis=1)
     # a ball at (nearly) rest stays there when resistance can hold it on the slope
     slope_acc = np.linalg.norm(acc, axis=1)
     rest = (speed < STOP_SPEED) & rolling & (slope_acc <= resist)
-    dv = dt * (acc - resist[:, None] * unit - (slide * mg)[:, None] * s_hat)
-    new_s = s + dt * (full - 3.5 * mg * s_hat)
+    dv = dt * (acc - resist[:, None] * unit - (slide * fric)[:, None] * s_hat)
+    new_s = s + dt * (full - 3.5 * fric[:, None] * s_hat)
     new_s[(slide < 1) | (np.sum(new_s * s, axis=1) < 0)] = 0.0
-    resist = resist + slide * mg
+    resist = resist + slide * fric
     # resistance cannot reverse the motion within a step
     new_u = u + dv
     reverse = (np.sum(new_u * u, axis=1) < 0) & (slope_acc <= resist)

@@ -20,8 +20,10 @@ from .fields import Field
 
 __all__ = ["BallKernel", "ball_kernel", "ball_step", "STATE_SIZE"]
 
-#: state of a shot: x, y, u_x, u_y, slip_x, slip_y, status, time, hole x, hole y, wall contacts
-STATE_SIZE = 11
+#: state of a shot: x, y, u_x, u_y, slip_x, slip_y, status, time, hole x, hole y, wall contacts,
+#: and the next step's mid-point (x, y) + (u_x, u_y) dt/2 where a tabulated surface is read
+STATE_SIZE = 13
+_MID = 11
 _STATUS = 6  # 0 while moving, 1 sunk, 2 out, 3 stopped
 
 _KERNELS: dict = {}
@@ -39,8 +41,9 @@ def ball_kernel(field: Field, dt: float = 0.01) -> BallKernel:
 
 # ------------------------------------------------------------------ the step, in pieces
 def _surface_terms(field: Field, p, tabulated_input: bool):
-    """Gradient, Hessian and friction factor at p; tabulated surfaces read them from a second
-    input ``aux`` (returned with the lookup description and the table), else analytic."""
+    """Gradient, Hessian and friction factor at p (the step's mid-point); tabulated surfaces
+    read them from a second input ``aux`` (looked up at the state's mid-point entries; returned
+    with the lookup description and the table), else analytic."""
     if not tabulated_input:
         grad, hess, fr = field.surface.casadi_terms(p, field.bounds)
         return grad, hess, fr, None, None, None
@@ -48,33 +51,38 @@ def _surface_terms(field: Field, p, tabulated_input: bool):
     aux = ca.SX.sym("aux", 6)
     grad, fr = aux[0:2], aux[5]
     hess = ca.vertcat(ca.horzcat(aux[2], aux[3]), ca.horzcat(aux[3], aux[4]))
-    lookup = dict(ix=0, iy=1, x0=xs[0], dx=xs[1] - xs[0], nx=len(xs), y0=ys[0],
+    lookup = dict(ix=_MID, iy=_MID + 1, x0=xs[0], dx=xs[1] - xs[0], nx=len(xs), y0=ys[0],
                   dy=ys[1] - ys[0], ny=len(ys), channels=6)
     return grad, hess, fr, aux, lookup, values
 
 
 def _roll(field: Field, dt: float, p, u, sl, grad, hess, fr):
-    """Skid, roll and rolling resistance over one step (the numpy engine's ``_step``): the new
-    position and velocity, the new slip, and whether the ball is at rest."""
-    mg = MU_SLIDE * G
-    curv = ca.mtimes([u.T, hess, u])
+    """Skid, roll and rolling resistance over one step (the numpy engine's ``_step``, the
+    surface terms read at the mid-step point p + u dt/2): the new position and velocity, the
+    new slip, and whether the ball is at rest."""
     s2 = 1 + ca.dot(grad, grad)
-    s_mag = ca.norm_2(sl)
-    slide = ca.fmin(ca.fmax(s_mag / (3.5 * mg * dt), 0.0), 1.0)
+    cos = 1 / ca.sqrt(s2)
+    fric = MU_SLIDE * G * cos
+    s_mag = ca.sqrt(ca.dot(sl, sl) + ca.dot(grad, sl) ** 2)  # along the surface
+    slide = ca.fmin(ca.fmax(s_mag / (3.5 * fric * dt), 0.0), 1.0)
     rolling = slide <= 0
     s_hat = sl / ca.fmax(s_mag, 1e-12)
+    k = (5.0 / 7.0 + (2.0 / 7.0) * slide) * G
+    a0 = -((k + ca.mtimes([u.T, hess, u])) / s2) * grad
+    um = u + 0.5 * dt * a0
+    curv = ca.mtimes([um.T, hess, um])
     full = -((G + curv) / s2) * grad
-    acc = -(((5.0 / 7.0 + (2.0 / 7.0) * slide) * G + curv) / s2) * grad
-    vs = ca.sqrt(ca.dot(u, u) + ca.dot(grad, u) ** 2)
-    unit = u / ca.fmax(vs, 1e-12)
-    resist_roll = (1 - slide) * (5.0 / 7.0) * field.rolling_resistance * fr * G
+    acc = -((k + curv) / s2) * grad
+    vs = ca.sqrt(ca.dot(um, um) + ca.dot(grad, um) ** 2)
+    unit = um / ca.fmax(vs, 1e-12)
+    resist_roll = (1 - slide) * (5.0 / 7.0) * field.rolling_resistance * fr * G * cos
     slope = ca.norm_2(acc)
     rest = ca.logic_and(ca.logic_and(ca.norm_2(u) < STOP_SPEED, rolling),
                         slope <= resist_roll)
-    dv = dt * (acc - resist_roll * unit - slide * mg * s_hat)
-    new_s = sl + dt * (full - 3.5 * mg * s_hat)
+    dv = dt * (acc - resist_roll * unit - slide * fric * s_hat)
+    new_s = sl + dt * (full - 3.5 * fric * s_hat)
     new_s = ca.if_else(ca.logic_or(slide < 1, ca.dot(new_s, sl) < 0), ca.DM.zeros(2), new_s)
-    holds = slope <= resist_roll + slide * mg
+    holds = slope <= resist_roll + slide * fric
     nu = u + dv
     reverse = ca.logic_and(ca.dot(nu, u) < 0, holds)
     nu = ca.if_else(ca.logic_or(reverse, rest), ca.DM.zeros(2), nu)
@@ -127,14 +135,15 @@ def ball_step(field: Field, dt: float, tabulated_input: bool = False):
     table) for :class:`seds_casadi.codegen.simd.SimdLoop`."""
     s = ca.SX.sym("s", STATE_SIZE)
     p, u, sl, status, t = s[0:2], s[2:4], s[4:6], s[_STATUS], s[7]
-    grad, hess, fr, aux, lookup, values = _surface_terms(field, p, tabulated_input)
+    grad, hess, fr, aux, lookup, values = _surface_terms(field, p + 0.5 * dt * u,
+                                                         tabulated_input)
     npos, nu, new_s, rest = _roll(field, dt, p, u, sl, grad, hess, fr)
     hole = s[8:10]
     drop = _drop(field, p, npos, nu, hole)
     pos, vel, slip, lost, n_hit = _boundary(field, npos, nu, new_s, s[10])
     new_status = ca.if_else(drop, 1, ca.if_else(lost, 2, ca.if_else(rest, 3, 0)))
     new = ca.vertcat(pos[0], pos[1], vel[0], vel[1], slip[0], slip[1], new_status, t + dt,
-                     hole, n_hit)
+                     hole, n_hit, pos[0] + 0.5 * dt * vel[0], pos[1] + 0.5 * dt * vel[1])
     out = ca.if_else(status == 0, new, s)
     if tabulated_input:
         return ca.Function("ball_step", [s, aux], [out]), lookup, values
@@ -153,8 +162,9 @@ class BallKernel:
     (used when the step cannot be translated, e.g. a tabulated surface's interpolant call, or
     no compiler works). ``"auto"`` picks simd when it can.
 
-    The state of a shot is (x, y, u_x, u_y, slip_x, slip_y, status, time, hole x, hole y, wall
-    contacts) with status 0 while moving, 1 sunk, 2 out, 3 stopped; finished shots are frozen.
+    The state of a shot is (x, y, u_x, u_y, slip_x, slip_y, status, time, hole x, hole y,
+    wall contacts, mid-point x, y) with status 0 while moving, 1 sunk, 2 out, 3 stopped;
+    finished shots are frozen.
     Between calls the finished shots are dropped, so a batch costs what its longest shot needs.
 
     Parameters
@@ -226,6 +236,7 @@ class BallKernel:
         S[0:2] = P.T
         S[2:4] = U.T
         S[4:6] = U.T  # no spin at the impact: the contact point slips at the ball's speed
+        S[_MID:_MID + 2] = (P + 0.5 * self.dt * U).T
         if self._simd is not None:
             self._run_simd(S, max_time)
         else:

@@ -9,6 +9,8 @@ table of derivatives on a grid (:meth:`Surface.table`).
 
 from __future__ import annotations
 
+import json
+
 import casadi as ca
 import numpy as np
 
@@ -16,6 +18,8 @@ __all__ = ["Surface", "SHAPES"]
 
 #: the surface shapes a field file may use
 SHAPES = ("plane", "hills", "arctan", "rough", "heightmap")
+#: extremes of the surfaces seen (shape, parameters, bounds) -> dict, see Surface.extremes
+_EXTREMES: dict = {}
 
 
 # ---------------------------------------------------------------- validation of a specification
@@ -142,7 +146,73 @@ class Surface:
             raise ValueError(f"{where}.shape: unknown shape {shape!r}; valid: {', '.join(SHAPES)}")
         p = dict(spec)
         _CHECKS[shape](p, bounds, where)
-        return cls(shape, p)
+        surface = cls(shape, p)
+        surface._check_followable(bounds, where)
+        return surface
+
+    def _check_followable(self, bounds, where: str) -> None:
+        """Refuse a surface curved more tightly than the ball's radius: the ball (a sphere
+        touching at one point) cannot follow it, and the step would not stay finite."""
+        from ..motion.golf import BALL_RADIUS
+
+        ext = self.extremes(bounds)
+        if ext["curvature"] * BALL_RADIUS > 1.0:
+            x, y = ext["where"]
+            raise ValueError(
+                f"{where}: the surface curves with a radius of {1e3 / ext['curvature']:.1f} mm"
+                f" near ({x:.3f}, {y:.3f}), tighter than the ball's radius "
+                f"({1e3 * BALL_RADIUS:.2f} mm): a ball cannot follow it. Smooth the surface "
+                "(smaller height differences between neighbouring points, wider bumps).")
+
+    def _terms(self, Q):
+        """Height, gradient and Hessian entries (xx, xy, yy) at Q (n, 2); the sums of bumps in
+        one pass (for :meth:`extremes`)."""
+        if self.shape not in ("hills", "rough"):
+            H = self.hessian(Q)
+            return self.height(Q), self.gradient(Q), (H[:, 0, 0], H[:, 0, 1], H[:, 1, 1])
+        dx = Q[:, 0, None] - self._c[None, :, 0]
+        dy = Q[:, 1, None] - self._c[None, :, 1]
+        w2 = self._w**2
+        g = self._a * np.exp(-(dx * dx + dy * dy) / (2 * w2))
+        gw = g / w2
+        grad = -np.column_stack([np.sum(gw * dx, axis=1), np.sum(gw * dy, axis=1)])
+        hxx = np.sum(gw * (dx * dx / w2 - 1), axis=1)
+        hyy = np.sum(gw * (dy * dy / w2 - 1), axis=1)
+        return g.sum(axis=1), grad, (hxx, np.sum(gw * dx * dy / w2, axis=1), hyy)
+
+    def extremes(self, bounds, spacing: float = 0.01) -> dict:
+        """Largest |H| range, slope and curvature over ``bounds`` (sampled on a grid).
+
+        Returns a dict: ``height_range`` [m], ``slope`` (largest |grad H|), ``curvature``
+        (largest spectral norm of Hess(H), 1/m; at least the surface's largest principal
+        curvature) and ``where`` (the point of largest curvature). Cached per bounds.
+        """
+        key = (self.shape, json.dumps(self.params, sort_keys=True, default=str),
+               tuple(float(v) for v in bounds), float(spacing))
+        if key in _EXTREMES:
+            return _EXTREMES[key]
+        if self.shape == "hills":
+            spacing = min(spacing, float(np.min(self._w)) / 4)
+        b = np.asarray(key[2])
+        xs = np.linspace(b[0], b[1], max(4, int(np.ceil((b[1] - b[0]) / spacing)) + 1))
+        ys = np.linspace(b[2], b[3], max(4, int(np.ceil((b[3] - b[2]) / spacing)) + 1))
+        X, Y = np.meshgrid(xs, ys, indexing="ij")
+        P = np.column_stack([X.ravel(), Y.ravel()])
+        lo, hi, slope, curv, at = np.inf, -np.inf, 0.0, 0.0, P[0]
+        chunk = max(256, 400_000 // max(1, len(getattr(self, "_a", [0]))))
+        for c in range(0, len(P), chunk):
+            Q = P[c:c + chunk]
+            h, g, (hxx, hxy, hyy) = self._terms(Q)
+            lo, hi = min(lo, h.min()), max(hi, h.max())
+            slope = max(slope, float(np.sqrt(np.max(np.sum(g * g, axis=1)))))
+            k = np.abs(0.5 * (hxx + hyy)) + np.sqrt((0.5 * (hxx - hyy)) ** 2 + hxy**2)
+            i = int(np.argmax(k))
+            if k[i] > curv:
+                curv, at = float(k[i]), Q[i]
+        out = dict(height_range=float(hi - lo), slope=slope, curvature=curv,
+                   where=(float(at[0]), float(at[1])))
+        _EXTREMES[key] = out
+        return out
 
     # ---------------------------------------------------------------- evaluation
     def _gauss(self, P):

@@ -76,6 +76,9 @@ class Robot:
     base : (x, y, z, yaw)
         Placement of the robot's base in the field frame (z up).
     club : Club
+    effort_excludes_gravity : bool
+        Whether the published effort limits bound the torques beyond gravity, tau - g(q),
+        rather than tau (the Katana's: measured from a Gazebo controller with gravity off).
     """
 
     name: str
@@ -84,6 +87,7 @@ class Robot:
     q_home: np.ndarray
     base: tuple = (0.0, 0.0, 0.0, 0.0)
     club: Club = field(default_factory=Club)
+    effort_excludes_gravity: bool = False
 
     def __post_init__(self) -> None:
         import pinocchio as pin
@@ -218,7 +222,7 @@ def load_robot(name_or_path: str, club: Club | None = None, base=(0.0, 0.0, 0.0,
     home = np.asarray(home, float)
     if home.shape != (model.nq,):
         raise ValueError(f"q_home has {home.size} values for {model.nq} joints")
-    robot = Robot(name, model, head, home, base, club)
+    robot = Robot(name, model, head, home, base, club, effort_excludes_gravity=name == "katana")
     _check_base(robot, field)
     return robot
 

@@ -65,9 +65,10 @@ def log3_sx(R) -> ca.SX:
 
 
 def orientation_error_sx(R, Rd, full: bool) -> ca.SX:
-    """Rotation vector from R towards Rd, as SX: all three axes (``full``: log(Rd R^T)), or
-    only the face's normal (x axis: R_x cross Rd_x) for arms with fewer than six joints, which
-    cannot also hold the shaft.
+    """Rotation vector from R towards Rd, as SX: all three axes (``full``: log(Rd R^T)), or,
+    for arms with fewer than six joints, which cannot also hold the shaft, only the turn about
+    the vertical that brings the horizontal part of the face's normal (x axis) onto Rd's (the
+    direction the ball leaves in; the face may tilt).
 
     Parameters
     ----------
@@ -77,7 +78,11 @@ def orientation_error_sx(R, Rd, full: bool) -> ca.SX:
     """
     if full:
         return log3_sx(Rd @ R.T)
-    return ca.cross(R[:, 0], Rd[:, 0])
+    # the turn about the vertical from the normal's horizontal part to the desired one's: the
+    # ball leaves along the horizontal part of the normal, whatever its tilt
+    n, d = R[:, 0], Rd[:, 0]
+    turn = ca.atan2(n[0] * d[1] - n[1] * d[0], n[0] * d[0] + n[1] * d[1])
+    return ca.vertcat(0, 0, turn)
 
 
 def face_orientation_sx(direction) -> ca.SX:

@@ -12,14 +12,17 @@ from .orientation import face_orientation, orientation_error_function
 __all__ = ["place_head", "place_robot", "default_base"]
 
 
-def _levenberg_marquardt(robot: Robot, q, err, W, iterations: int, tol: float):
+def _levenberg_marquardt(robot: Robot, q, err, W, iterations: int, tol: float,
+                         angle_tol: float = 1e-4):
     """Damped least squares on the weighted pose error ``err(q)`` from ``q`` (within the
-    joint limits), until the position error is below ``tol``: (q, error)."""
+    joint limits), until the position error is below ``tol`` and the orientation error below
+    ``angle_tol`` [rad] (or no step improves it): (q, error)."""
     q = np.clip(q.copy(), robot.lower, robot.upper)
     e = err(q)
     lam = 1e-2
     for _ in range(iterations):
-        if np.linalg.norm(e[:3]) < tol:
+        if (np.linalg.norm(e[:3]) < tol
+                and np.linalg.norm(e[3:]) < angle_tol * max(float(np.min(W[3:])), 1e-12)):
             break
         J = W[:, None] * robot.head_jacobian(q)
         dq = np.linalg.solve(J.T @ J + lam * np.eye(robot.nv), J.T @ e)

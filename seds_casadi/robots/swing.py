@@ -19,6 +19,7 @@ from ..motion.rollout import Perturbations
 from ..motion.rotation import rotation_z
 from .controller import Gains, SwingController
 from .dynamics import effective_mass
+from .limits import limit_report
 from .models import Robot
 from .placement import place_head
 
@@ -42,9 +43,18 @@ class SwingResult:
     commanded : array (3,)
         kappa v* R_alpha psi*.
     peak_torque_ratio : float
-        max |tau_i| / effort_i over the swing.
+        max |tau_i| / effort_i over the swing (tau_i - g_i(q) for arms whose efforts exclude
+        gravity, the Katana).
     limits_ok : bool
         Joint positions stayed within their limits.
+    peak_speed, peak_torque : array (nv,)
+        Largest |qd_i| [rad/s] and |tau_i| [N m] (as counted against the efforts) over the
+        simulated swing.
+    speed_ratio, torque_ratio : array (nv,)
+        The same against each joint's velocity limit and effort.
+    limits_broken : list of str
+        Every limit the simulated arm broke (speed, torque, position), by joint; empty for a
+        swing within its limits (:attr:`within_limits`).
     tick_us : array (n,)
         Wall time of each control tick [us] (the controller only, not the simulation).
     face_normal : array (3,)
@@ -69,6 +79,16 @@ class SwingResult:
     tick_us: np.ndarray = field(default_factory=lambda: np.zeros(0))
     face_normal: np.ndarray = field(default_factory=lambda: np.full(3, np.nan))
     effective_mass: float = np.nan
+    peak_speed: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    peak_torque: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    speed_ratio: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    torque_ratio: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    limits_broken: list = field(default_factory=list)
+
+    @property
+    def within_limits(self) -> bool:
+        """No joint over its velocity, torque or position limit at any tick."""
+        return not self.limits_broken
 
     @property
     def direction_error_deg(self) -> float:
@@ -138,14 +158,16 @@ class _SwingLog:
                        "mass": effective_mass(robot, q, normal)}
 
     def result(self, robot: Robot, ctl: SwingController) -> SwingResult:
-        tau, Q = np.array(self.TAU), np.array(self.Q)
-        eff = np.where(robot.effort > 0, robot.effort, np.inf)
-        res = SwingResult(np.array(self.T), Q, np.array(self.QD), tau, np.array(self.X),
+        tau, Q, QD = np.array(self.TAU), np.array(self.Q), np.array(self.QD)
+        lim = limit_report(robot, Q, QD, tau)
+        res = SwingResult(np.array(self.T), Q, QD, tau, np.array(self.X),
                           ctl.hit is not None,
-                          peak_torque_ratio=float(np.max(np.abs(tau) / eff)),
+                          peak_torque_ratio=float(np.max(lim["torque_ratio"])),
                           limits_ok=bool(np.all(Q >= robot.lower - 1e-6)
                                          and np.all(Q <= robot.upper + 1e-6)),
-                          tick_us=np.array(self.TICK) / 1e3)
+                          tick_us=np.array(self.TICK) / 1e3, peak_speed=lim["peak_speed"],
+                          peak_torque=lim["peak_torque"], speed_ratio=lim["speed_ratio"],
+                          torque_ratio=lim["torque_ratio"], limits_broken=lim["broken"])
         if ctl.hit is not None:
             res.hit_time = ctl.hit["t"]
             res.hit_velocity = self.at_hit["velocity"]
@@ -155,11 +177,35 @@ class _SwingLog:
         return res
 
 
+def _check_swing_inputs(ball, alpha, kappa, period, substeps, max_time, rest_time, hole):
+    """ValueError naming a bad input of :func:`simulate_swing`; the ball and hole as arrays."""
+    b = np.asarray(ball, float).copy()
+    if b.shape != (3,) or not np.all(np.isfinite(b)):
+        raise ValueError(f"ball must be a finite 3-vector (x, y, z) in the field frame, got "
+                         f"{np.asarray(ball).tolist()}")
+    if not np.isfinite(alpha):
+        raise ValueError(f"alpha must be a finite angle in radians, got {alpha}")
+    if not (np.isfinite(kappa) and kappa > 0):
+        raise ValueError(f"kappa (the speed gain) must be positive and finite, got {kappa}; "
+                         "it scales the hitting speed, so 0 or less would not swing forwards")
+    for name, v in (("period", period), ("max_time", max_time)):
+        if not (np.isfinite(v) and v > 0):
+            raise ValueError(f"{name} must be positive [s], got {v}")
+    if not (np.isfinite(rest_time) and rest_time >= 0):
+        raise ValueError(f"rest_time must be >= 0 s, got {rest_time}")
+    if int(substeps) != substeps or substeps < 1:
+        raise ValueError(f"substeps must be a positive integer, got {substeps}")
+    h = None if hole is None else np.asarray(hole, float).copy()
+    if h is not None and (h.shape not in ((2,), (3,)) or not np.all(np.isfinite(h))):
+        raise ValueError(f"hole must be a finite (x, y) or (x, y, z), got {np.asarray(hole)}")
+    return b, h
+
+
 def simulate_swing(robot: Robot, motion: HittingMotion, ball, alpha: float = 0.0,
                    kappa: float = 1.0, start=None, period: float = 0.002, substeps: int = 4,
                    max_time: float = 3.0, rest_time: float = 0.4, gains: Gains | None = None,
                    perturb=None, rest_mode: str = "flat", hole=None,
-                   params=None) -> SwingResult:
+                   params=None, controller: dict | None = None) -> SwingResult:
     """Swing at the ball with the 500 Hz controller on the robot's forward dynamics.
 
     Parameters
@@ -188,16 +234,20 @@ def simulate_swing(robot: Robot, motion: HittingMotion, ball, alpha: float = 0.0
         :meth:`HittingMotion.rollout`'s, evaluated every tick from the current time, ball and
         hole (e.g. a hitting-parameter model on the situation hole - ball); overrides
         ``alpha`` and ``kappa``.
+    controller : dict, optional
+        Further options of :class:`~seds_casadi.robots.controller.SwingController`, e.g.
+        ``{"ik": "qp"}`` (limits as QP constraints), ``{"cartesian_speed_limit": None}`` or
+        ``{"blend_time": 0.0}`` (no start from rest: the velocity step of before).
     """
-    ball = np.asarray(ball, float).copy()
-    hole = None if hole is None else np.asarray(hole, float).copy()
+    ball, hole = _check_swing_inputs(ball, alpha, kappa, period, substeps, max_time,
+                                     rest_time, hole)
     robot.check_reach(ball)
     events = Perturbations(perturb, ("ball", "hole"))
     if params is not None:
         alpha, kappa = (float(v) for v in params(0.0, ball.copy(), hole))
     if start is None:
         start = rotation_z(alpha) @ np.array([-0.3, 0.0, 0.05])
-    ctl = SwingController(robot, motion, period, gains, rest_mode)
+    ctl = SwingController(robot, motion, period, gains, rest_mode, **(controller or {}))
     q = place_head(robot, ctl.contact_point(ball, alpha) + np.asarray(start, float),
                    motion.commanded_direction(alpha))
     qd = np.zeros(robot.nv)
@@ -212,6 +262,9 @@ def simulate_swing(robot: Robot, motion: HittingMotion, ball, alpha: float = 0.0
                 hole = np.asarray(e["hole"], float).copy()
         if params is not None and ctl.hit is None:
             alpha, kappa = (float(v) for v in params(t, ball.copy(), hole))
+            if not (np.isfinite(alpha) and np.isfinite(kappa) and kappa > 0):
+                raise ValueError(f"params returned alpha {alpha}, kappa {kappa} at t = {t:.3f}"
+                                 " s: a finite alpha and a positive kappa are needed")
         had_hit = ctl.hit is not None
         t0 = time.perf_counter_ns()
         tau = ctl.tick(q, qd, ball, alpha, kappa, t)

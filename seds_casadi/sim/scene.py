@@ -123,10 +123,10 @@ class Scene:
 
 
 class RollingResistance:
-    """The rolling resistance, a load on the ball: a force rho m g (times the field's local
-    friction factor) against the ball's velocity at its centre, while it rolls (its contact
-    point, at -r n from the centre with n the surface normal, hardly slips) and only after the
-    launch (exudyn's contact has Coulomb friction only)."""
+    """The rolling resistance, a load on the ball: a force rho m g cos(theta) (times the
+    field's local friction factor) against the ball's velocity at its centre, while it rolls
+    (its contact point, at -r n from the centre with n the surface normal, hardly slips) and
+    only after the launch (exudyn's contact has Coulomb friction only)."""
 
     def __init__(self, field: Field, ball_node: int, state: ShotState) -> None:
         self.surface = field.surface
@@ -171,7 +171,8 @@ class RollingResistance:
             return zero  # the contact point slips: the ball skids, no rolling resistance
         fac = (1.0 if self.constant_friction
                else float(self.surface.friction_factor(np.array([[px, py]]))[0]))
-        f = self.rho * fac * BALL_MASS * G / s
+        # rho m g cos(theta): the resistance scales with the normal force (nz = cos(theta))
+        f = self.rho * fac * BALL_MASS * G * nz / s
         return [-f * vx, -f * vy, -f * vz]
 
 
