@@ -16,8 +16,7 @@ import pytest
 
 from seds_casadi import Demonstrations, ModelFileError, StableDS, load_demonstrations
 from seds_casadi.app.cli import main
-from seds_casadi.app.executors import check_scheduler, open_executor
-from seds_casadi.app.outdir import LOCK_NAME, output_folder
+from seds_casadi.app.executors import open_executor
 from seds_casadi.core.model_files import checksum
 from seds_casadi.minigolf.fields import FIELDS_FOLDER, Field, load_field
 from seds_casadi.minigolf.hitting_data import HittingDataset
@@ -167,6 +166,8 @@ def test_dask_against_a_service_that_is_not_a_scheduler(mode):
 
 
 def test_dask_refused_port_fails_at_once_and_a_real_scheduler_answers():
+    from seds_casadi.app.executors import check_scheduler
+
     s = socket.socket()
     s.bind(("127.0.0.1", 0))
     port = s.getsockname()[1]
@@ -334,6 +335,8 @@ def test_field_size_limits_come_before_allocation(change, msg):
 
 # ------------------------------------------------------------------ 8. signals, concurrency
 def test_a_second_run_on_the_same_out_is_refused(tmp_path, capsys, demo_npz):
+    from seds_casadi.app.outdir import output_folder
+
     out = tmp_path / "o"
     with output_folder(out):
         code, _, err = _cli(capsys, "fit", str(demo_npz), "--out", str(out))
@@ -342,6 +345,8 @@ def test_a_second_run_on_the_same_out_is_refused(tmp_path, capsys, demo_npz):
 
 
 def test_temporary_files_of_a_killed_run_are_swept(tmp_path):
+    from seds_casadi.app.outdir import LOCK_NAME, output_folder
+
     out = tmp_path / "o"
     (out / "models").mkdir(parents=True)
     stale = [out / ".tmp-abc.npz", out / "models" / ".tmp-x"]

@@ -60,8 +60,8 @@ def _as_demo_list(arrays, what: str) -> list[np.ndarray]:
             raise TypeError(f"{what}[{n}]: not a numeric array ({exc})") from None
         if a.ndim == 1:
             a = a[:, None]
-        if a.ndim != 2:
-            raise ValueError(f"{what}[{n}]: expected shape (T_n, d), got {a.shape}")
+        if a.ndim != 2 or a.shape[1] == 0:
+            raise ValueError(f"{what}[{n}]: expected shape (T_n, d) with d >= 1, got {a.shape}")
         if not np.all(np.isfinite(a)):
             bad = int(np.argwhere(~np.isfinite(a))[0, 0])
             raise ValueError(

@@ -121,10 +121,9 @@ def read_guarded(path: str | os.PathLike, kind: str, versions: tuple[int, ...],
                              "(written by an older version without a checksum? save it again)")
     if str(data["format"]) != kind:
         raise ModelFileError(f"{path}: format {str(data['format'])!r} is not {kind!r}")
-    try:
-        version = int(data["version"])
-    except (TypeError, ValueError):
-        raise ModelFileError(f"{path}: entry 'version' is not an integer") from None
+    if data["version"].dtype.kind not in "iu" or data["version"].shape != ():
+        raise ModelFileError(f"{path}: entry 'version' is not an integer")
+    version = int(data["version"])
     if version not in versions:
         raise ModelFileError(f"{path}: version {version} is not supported (this library reads "
                              f"version {', '.join(map(str, versions))})")

@@ -108,7 +108,7 @@ def _check_surface(surface, extent, where: str) -> None:
     if not isinstance(surface, dict):
         raise ValueError(f"{where}: an object with an entry 'shape' is needed, got {surface!r}")
     shape = surface.get("shape")
-    if shape not in SURFACE_KEYS:
+    if not isinstance(shape, str) or shape not in SURFACE_KEYS:
         raise ValueError(f"{where}.shape: unknown shape {shape!r}{did_you_mean(shape, SURFACE_KEYS)}"
                          f"; valid: {', '.join(SURFACE_KEYS)}")
     valid = ("shape", *SURFACE_KEYS[shape])

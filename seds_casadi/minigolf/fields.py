@@ -167,7 +167,10 @@ class Field:
             if not (np.isfinite(rho) and rho >= 0):
                 raise ValueError(f"{source}: rolling_resistance must be >= 0, got {rho}")
         elif "stimp" in spec:
-            rho = stimp_to_rho(spec["stimp"])
+            try:
+                rho = stimp_to_rho(spec["stimp"])
+            except ValueError as exc:
+                raise ValueError(f"{source}: {exc}") from None
         else:
             raise ValueError(f"{source}: missing entry 'stimp' or 'rolling_resistance'")
         e = float(spec.get("wall_restitution", 0.6))
