@@ -424,3 +424,65 @@ def test_huge_demonstrations_and_bad_fit_info_have_clear_errors(spiral_demos):
         I2 = np.eye(2)
         StableDS(np.ones(1), np.zeros((1, 4)), np.block([[I2, -I2], [-I2, 2 * I2]])[None],
                  np.zeros(2), fit_info=[("a", 1)])
+
+
+def _children(pid: int) -> list[str]:
+    out = []
+    for d in os.listdir("/proc"):
+        if d.isdigit():
+            try:
+                with open(f"/proc/{d}/stat") as fh:
+                    f = fh.read().rsplit(")", 1)[1].split()
+                if int(f[1]) == pid and f[0] != "Z":
+                    out.append(d)
+            except (OSError, IndexError, ValueError):
+                pass
+    return out
+
+
+def test_ctrl_c_on_a_command_with_workers_ends_cleanly(tmp_path):
+    """``seds-casadi lasa --workers 2`` interrupted while its workers fit: exit 130 within
+    2 s, one line and no traceback, no worker left, no temporary file."""
+    import signal
+    import subprocess
+    import sys
+
+    out = tmp_path / "lasa"
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+        [os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
+         os.environ.get("PYTHONPATH", "")]))
+    proc = subprocess.Popen([sys.executable, "-m", "seds_casadi", "lasa", "--workers", "2",
+                             "--objectives", "direction", "--protocols", "all", "--no-figures",
+                             "--out", str(out)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, env=env, start_new_session=True)
+    try:
+        t0 = time.perf_counter()
+        while len(_children(proc.pid)) < 2 and time.perf_counter() - t0 < 60:
+            time.sleep(0.2)
+        time.sleep(3.0)  # the workers are importing or fitting
+        workers = _children(proc.pid)
+        assert proc.poll() is None and len(workers) >= 2
+        t = time.perf_counter()
+        os.killpg(proc.pid, signal.SIGINT)
+        _, err = proc.communicate(timeout=30)
+        assert time.perf_counter() - t < 3.0
+        assert proc.returncode == 130 and "interrupted" in err and "Traceback" not in err, err
+        assert not any(map(_alive, workers))
+        assert not [p for p in out.rglob(".tmp-*")]
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+
+
+def test_a_urdf_without_a_flange_takes_its_chains_tip():
+    pytest.importorskip("pinocchio")
+    from seds_casadi.robots.models import ROBOTS_FOLDER, load_robot
+
+    path = os.path.join(ROBOTS_FOLDER, "wam7.urdf")
+    known, own = load_robot("wam"), load_robot(path)
+    named = load_robot(path + "#wam_flange")
+    for r in (own, named):
+        f, g = r.model.frames[r.head_frame], known.model.frames[known.head_frame]
+        assert f.parentJoint == g.parentJoint and f.placement.isApprox(g.placement)
+    with pytest.raises(ValueError, match="no frame 'nolink'"):
+        load_robot(path + "#nolink")

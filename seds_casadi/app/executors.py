@@ -110,6 +110,14 @@ def _worker_start(parent: int) -> None:
 def stop_workers(ex: ProcessPoolExecutor, grace: float = 1.0) -> None:
     """Terminate the worker processes of ``ex`` now (running tasks are abandoned): SIGTERM,
     then SIGKILL for any still alive after ``grace`` seconds."""
+    # tasks already cancelled (``Executor.map`` cancels the rest when interrupted) are dropped
+    # first: the pool's manager thread would fail them again on finding its workers gone and
+    # die with InvalidStateError (CPython 3.11's terminate_broken does not skip done futures)
+    pending = getattr(ex, "_pending_work_items", None)
+    if isinstance(pending, dict):
+        for key, item in list(pending.items()):
+            if item.future.done():
+                pending.pop(key, None)
     procs = list((getattr(ex, "_processes", None) or {}).values())
     for p in procs:
         with contextlib.suppress(Exception):
@@ -121,6 +129,11 @@ def stop_workers(ex: ProcessPoolExecutor, grace: float = 1.0) -> None:
             if p.is_alive():
                 p.kill()
                 p.join(1.0)
+    # let the pool's manager thread mark the abandoned tasks as failed before anything cancels
+    # them (a cancelled task it then fails raises InvalidStateError in that thread, 3.11)
+    manager = getattr(ex, "_executor_manager_thread", None)
+    if manager is not None:
+        manager.join(grace)
 
 
 def check_scheduler(address: str, timeout: float = 10.0) -> dict:

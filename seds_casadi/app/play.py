@@ -391,7 +391,7 @@ def play(config: PlayConfig | None = None, **overrides) -> dict:
     from ..robots.models import load_robot, robot_names
 
     cfg = with_overrides(PlayConfig, config, overrides).effective()
-    if cfg.robot not in robot_names() and not str(cfg.robot).endswith(".urdf"):
+    if cfg.robot not in robot_names() and ".urdf" not in str(cfg.robot):
         raise ValueError(f"unknown robot {cfg.robot!r}; known: {', '.join(robot_names())}")
     fld = load_field(cfg.field)
     load_robot(cfg.robot)  # a robot that does not load fails before any work

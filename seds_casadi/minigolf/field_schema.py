@@ -163,8 +163,9 @@ def _check_heightmap(heights, where: str) -> None:
     if not isinstance(heights, list):
         raise ValueError(f"{where}.heights: a list of rows of heights is needed, got "
                          f"{type(heights).__name__}")
-    rows = len(heights)
-    cols = len(heights[0]) if rows and isinstance(heights[0], list) else 0
+    if not heights or not all(isinstance(r, list) for r in heights):
+        return  # Surface.from_spec: "a 2-D grid of at least 4 x 4 heights"
+    rows, cols = len(heights), len(heights[0])
     if rows * cols > MAX_HEIGHTMAP_VALUES:
         raise ValueError(f"{where}.heights: {rows} x {cols} heights; at most "
                          f"{MAX_HEIGHTMAP_VALUES} values are supported")
