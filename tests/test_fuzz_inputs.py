@@ -30,7 +30,7 @@ PACKAGE = os.path.dirname(os.path.abspath(seds_casadi.__file__))
 #: hypothesis examples per class of input (``SEDS_FUZZ_SCALE=20`` multiplies them, for a
 #: longer hunt outside CI)
 EXAMPLES = {k: v * int(os.environ.get("SEDS_FUZZ_SCALE", "1")) for k, v in
-            {"arrays": 150, "npz": 80, "csv": 80, "field": 200, "model": 120}.items()}
+            {"arrays": 150, "npz": 150, "csv": 80, "field": 200, "model": 120}.items()}
 
 
 def _fuzz(n: int):
@@ -116,20 +116,42 @@ _KEYS = ["pos_0", "pos_1", "pos_2", "pos_3", "vel_0", "vel_1", "t_0", "t_1", "dt
 
 
 @st.composite
+def _npz_keys(draw):
+    """Entry names: a well-formed file (pos_0..pos_{n-1} with dt, vel_n or t_n), perhaps with
+    one entry dropped or added, or a random choice of names."""
+    if draw(st.booleans()):
+        return draw(st.lists(st.sampled_from(_KEYS), min_size=1, max_size=6, unique=True))
+    n = draw(st.integers(1, 3))
+    extra = draw(st.sampled_from(["dt", "vel", "t"]))
+    keys = [f"pos_{i}" for i in range(n)] + (["dt"] if extra == "dt" else
+                                             [f"{extra}_{i}" for i in range(n)])
+    if draw(st.booleans()):
+        keys.append("target")
+    change = draw(st.sampled_from(["none", "none", "drop", "add"]))
+    if change == "drop" and len(keys) > 1:
+        keys.pop(draw(st.integers(0, len(keys) - 1)))
+    elif change == "add":
+        keys.append(draw(st.sampled_from([k for k in _KEYS if k not in keys])))
+    return keys
+
+
+@st.composite
 def _npz_case(draw):
-    keys = draw(st.lists(st.sampled_from(_KEYS), min_size=1, max_size=6, unique=True))
-    T, d = draw(st.integers(1, 10)), draw(st.integers(1, 3))
+    keys = draw(_npz_keys())
+    T, d = draw(st.integers(2, 10)), draw(st.integers(1, 3))
     data = {}
     for k in keys:
         if k == "dt":
             data[k] = np.array(draw(st.sampled_from([0.05, -1.0, 0.0, np.nan])))
         elif k == "target":
-            data[k] = np.zeros(draw(st.integers(1, 3)))
+            data[k] = np.zeros(draw(st.sampled_from([d, d, 1, 3])))
         elif k.startswith("t_"):
             data[k] = np.arange(T + draw(st.integers(-1, 1))) * 0.05
         else:
             a = np.linspace(1.0, 0.0, T)[:, None] * (np.arange(d) + 1.0)
-            if draw(st.booleans()):
+            if k.startswith("vel"):
+                a = np.gradient(a, 0.05, axis=0) if T > 1 else a
+            if draw(st.sampled_from([False, False, False, True])):
                 a = a + 1j * draw(st.floats(-1, 1))
             data[k] = a
     return data
