@@ -356,6 +356,13 @@ def test_temporary_files_of_a_killed_run_are_swept(tmp_path):
     with output_folder(out):
         assert not any(p.exists() for p in stale) and (out / "keep.csv").exists()
         assert (out / LOCK_NAME).read_text() == str(os.getpid())
+    assert not (out / LOCK_NAME).exists() and (out / "keep.csv").exists()
+
+
+def test_a_failed_command_leaves_no_folder(tmp_path, capsys):
+    out = tmp_path / "new"
+    code, _, err = _cli(capsys, "fit", str(tmp_path / "missing.npz"), "--out", str(out))
+    assert code == 2 and "missing.npz" in err and not out.exists()
 
 
 _SCRIPT = """

@@ -3,9 +3,11 @@
 :func:`output_folder` makes sure the folder can be written before a command spends minutes on
 work it could not save (a path that is a file, lies under a file or is not writable is a
 ``ValueError`` naming it), holds an exclusive lock on it for the command's duration (a second run
-on the same folder is refused at once instead of mixing its outputs with the first's) and removes
-the temporary files (``.tmp-*``, written by :mod:`seds_casadi.core._io` before an atomic rename)
-that a killed run left behind: while the lock is held no other run can be writing them.
+on the same folder is refused at once instead of mixing its outputs with the first's; the
+lock file is removed at the end, and so is the folder if the command made it and left it
+empty) and removes the temporary files (``.tmp-*``, written by :mod:`seds_casadi.core._io`
+before an atomic rename) that a killed run left behind: while the lock is held no other run
+can be writing them.
 """
 
 from __future__ import annotations
@@ -66,6 +68,7 @@ def output_folder(path: str | os.PathLike) -> Iterator[str]:
         ``path`` is a file, under a file or not writable, or another run holds its lock.
     """
     path = os.fspath(path)
+    created = not os.path.exists(path)
     _check_writable(path)
     lock_path = os.path.join(path, LOCK_NAME)
     try:
@@ -82,9 +85,23 @@ def output_folder(path: str | os.PathLike) -> Iterator[str]:
             raise ValueError(f"--out {path!r} is in use by another seds-casadi run (pid "
                              f"{other}); wait for it to finish or choose another folder") \
                 from None
+        try:  # the lock file may have been removed by the run that held it just now
+            same = os.stat(lock_path).st_ino == os.fstat(fd).st_ino
+        except OSError:
+            same = False
+        if not same:
+            raise ValueError(f"--out {path!r} was in use by another seds-casadi run a moment "
+                             "ago; run again")
         os.ftruncate(fd, 0)
         os.pwrite(fd, str(os.getpid()).encode(), 0)
         sweep_temporary_files(path)
-        yield path
+        try:
+            yield path
+        finally:  # no leftovers: the lock file goes, and a folder made for nothing too
+            with contextlib.suppress(OSError):
+                os.unlink(lock_path)
+            if created:
+                with contextlib.suppress(OSError):
+                    os.rmdir(path)  # only if empty
     finally:
         os.close(fd)  # releases the lock
