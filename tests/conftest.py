@@ -58,6 +58,9 @@ SLOW_MODULES = {"test_examples.py", "test_play.py", "test_validation.py",
                 "test_robots_control.py", "test_cli_and_lasa.py", "test_readme.py",
                 "test_replay.py", "test_validate_workers.py", "test_swing_limits.py"}
 SLOW_TESTS = {
+    "test_play_checks_its_executor_before_learning",
+    "test_workers_stop_within_two_seconds",
+    "test_ctrl_c_on_a_command_with_workers_ends_cleanly",
     "test_fifty_random_swings_hit_within_one_degree_and_two_percent",
     "test_a_badly_lined_up_fit_is_refitted_and_reported",
     "test_table1_command_line_quick",

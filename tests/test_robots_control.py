@@ -241,8 +241,20 @@ def test_bad_inputs(tmp_path, motion):
     bad.write_text("<robot name='x'><link name='a'></robot>")
     with pytest.raises(ValueError, match="failed to load"):
         load_robot(str(bad), flange="a")
-    with pytest.raises(ValueError, match="flange"):
+    with pytest.raises(ValueError, match="failed to load"):  # no flange: read first
         load_robot(str(bad))
+    # without a flange an arm that branches is refused, naming its tips and the remedy
+    joint = ("<joint name='{0}' type='revolute'><parent link='base'/><child link='{1}'/>"
+             "<axis xyz='0 0 1'/><limit lower='-1' upper='1' effort='10' velocity='1'/>"
+             "</joint>")
+    link = ("<link name='{0}'><inertial><mass value='1'/><inertia ixx='0.01' ixy='0' ixz='0' "
+            "iyy='0.01' iyz='0' izz='0.01'/></inertial></link>")
+    fork = tmp_path / "fork.urdf"
+    fork.write_text("<robot name='fork'>" + link.format("base") + link.format("l1")
+                    + link.format("l2") + joint.format("j1", "l1") + joint.format("j2", "l2")
+                    + "</robot>")
+    with pytest.raises(ValueError, match=r"branches \(tip joints \['j1', 'j2'\]\).*#LINK"):
+        load_robot(str(fork))
     with pytest.raises(ValueError, match="inside the field surface"):
         load_robot("wam", base=(0, 0.5, -0.2, 0))
     from seds_casadi.minigolf.fields import load_field

@@ -62,7 +62,7 @@ def test_strategy_sets_round_trip_and_combine(tmp_path, flat_strategies):
     assert len(data) == sum(len(s.data) for s in ss.strategies)
     assert sorted(set(data.labels)) == [s.label for s in ss.strategies]
     (tmp_path / "bad.npz").write_bytes(b"no")
-    with pytest.raises(ValueError, match="not a strategy set"):
+    with pytest.raises(ValueError, match="not a readable seds_casadi.StrategySet file"):
         StrategySet.load(tmp_path / "bad.npz")
 
 

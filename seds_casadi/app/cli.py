@@ -20,6 +20,7 @@ import contextlib
 import json
 import logging
 import os
+import signal
 import sys
 import warnings
 from collections.abc import Iterator
@@ -238,7 +239,7 @@ def _add_play(sub, quiet) -> None:
 def _cmd_fit(a) -> int:
     from ..core.demonstrations import load_demonstrations
     from ..core.seds import SEDS
-    from .plotting import save_figure
+    from .plotting import _plt, plot_1d_reproductions, save_figure
 
     kw = {"dt": a.dt} if a.dt is not None else {}
     demos = load_demonstrations(a.demonstrations, **kw)
@@ -252,10 +253,15 @@ def _cmd_fit(a) -> int:
     starts = [p[0] for p in demos.positions]
     span = max(float(max(abs(p - demos.target).max() for p in demos.positions)), 1e-9)
     repro = model.rollout(starts, dt=demos.estimated_dt(), tol=1e-3 * span, max_steps=20000)
-    from .plotting import plot_fit_views
+    if demos.n_dims >= 2:
+        from .plotting import plot_fit_views
 
-    fig = plot_fit_views(model, demos, repro, title=f"{os.path.basename(a.demonstrations)}: "
-                         f"SEDS ({a.objective}, K={model.n_components})")
+        fig = plot_fit_views(model, demos, repro, title=f"{os.path.basename(a.demonstrations)}: "
+                             f"SEDS ({a.objective}, K={model.n_components})")
+    else:
+        fig, ax = _plt().subplots(figsize=(5.5, 5))
+        plot_1d_reproductions(model, demos, repro, ax=ax,
+                              title=f"SEDS ({a.objective}, K={model.n_components})")
     save_figure(fig, os.path.join(a.out, "streamlines.png"))
     info = {k: model.fit_info[k] for k in ("status", "iterations", "objective", "seconds")}
     print(json.dumps(info, indent=1))
@@ -363,9 +369,25 @@ _COMMANDS = {"fit": _cmd_fit, "lasa": _cmd_lasa, "table1": _cmd_table1,
              "validate": _cmd_validate, "play": _cmd_play}
 
 
+#: errors a user's input or environment can cause: an ``error:`` line and exit code 2
+_USER_ERRORS: tuple[type[BaseException], ...] = (ValueError, TypeError, OSError, MemoryError,
+                                                 RecursionError)
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of ``seds-casadi``; returns the exit code."""
+    """Entry point of ``seds-casadi``; returns the exit code.
+
+    A user's mistake (bad input, options, files, an unusable ``--out``) prints one line
+    ``seds-casadi COMMAND: error: ...`` on stderr and returns 2; an interruption (Ctrl-C,
+    SIGTERM) stops the workers, removes temporary files and returns 130; ``--debug`` (anywhere
+    on the line) shows the traceback instead.
+    """
+    argv = list(sys.argv[1:] if argv is None else argv)
+    debug = "--debug" in argv
+    argv = [x for x in argv if x != "--debug"]
     parser = build_parser()
+    parser.add_argument("--debug", action="store_true",
+                        help="show the full traceback of an error instead of one line")
     a = parser.parse_args(argv)
     if a.command is None:
         parser.print_help()
@@ -373,15 +395,44 @@ def main(argv: list[str] | None = None) -> int:
     if a.command not in _COMMANDS:
         parser.error(f"unknown command {a.command}")
     from ..core.errors import ConvergenceWarning, SEDSError
+    from .outdir import output_folder
 
     warnings.simplefilter("always", ConvergenceWarning)
+    previous = _raise_on_sigterm()
     try:
-        with command_logging(quiet=getattr(a, "quiet", False),
-                             names=_COMMAND_LOGGERS.get(a.command, _DEFAULT_LOGGERS)):
+        with output_folder(a.out), command_logging(
+                quiet=getattr(a, "quiet", False),
+                names=_COMMAND_LOGGERS.get(a.command, _DEFAULT_LOGGERS)):
             return _COMMANDS[a.command](a)
-    except (ValueError, TypeError, FileNotFoundError, SEDSError) as exc:
-        print(f"seds-casadi {a.command}: error: {exc}", file=sys.stderr)
+    except KeyboardInterrupt:
+        if debug:
+            raise
+        print(f"seds-casadi {a.command}: interrupted; the files written so far are complete, "
+              f"the rest was not written", file=sys.stderr)
+        return 130
+    except (*_USER_ERRORS, SEDSError) as exc:
+        if debug:
+            raise
+        text = str(exc) or type(exc).__name__
+        if isinstance(exc, OSError) and exc.filename and str(exc.filename) not in text:
+            text = f"{exc.filename}: {text}"
+        print(f"seds-casadi {a.command}: error: {text}", file=sys.stderr)
         return 2
+    finally:
+        with contextlib.suppress(ValueError, TypeError):  # not the main thread
+            signal.signal(signal.SIGTERM, previous)
+
+
+def _raise_on_sigterm():
+    """Turn SIGTERM into KeyboardInterrupt for a command's duration (the clean-up of Ctrl-C
+    runs); returns the previous handler."""
+    def handler(signum, frame):
+        raise KeyboardInterrupt
+
+    try:
+        return signal.signal(signal.SIGTERM, handler)
+    except ValueError:  # not the main thread: leave signals alone
+        return signal.getsignal(signal.SIGTERM)
 
 
 if __name__ == "__main__":  # pragma: no cover

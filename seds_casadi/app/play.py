@@ -352,16 +352,12 @@ def _round_tasks(cfg: PlayConfig, fld, data, fitted: dict, balls, holes,
     return tasks
 
 
-def _play_round(cfg: PlayConfig, tasks: list[dict]) -> list[dict]:
+def _play_round(cfg: PlayConfig, tasks: list[dict], ex) -> list[dict]:
     """Step 4: the tasks on this process, local workers or Dask; rows in the tasks' order."""
-    from .executors import open_executor
-
     _LOG.info("playing %d shots ...", len(tasks))
-    with open_executor(cfg.workers, cfg.dask) as ex:
-        futures = [ex.submit(play_shot, t) for t in tasks]
-        it = progress_bar(futures, cfg.progress, desc=f"playing {len(tasks)} shots",
-                          unit="shot")
-        return [f.result() for f in it]
+    futures = [ex.submit(play_shot, t) for t in tasks]
+    it = progress_bar(futures, cfg.progress, desc=f"playing {len(tasks)} shots", unit="shot")
+    return [f.result() for f in it]
 
 
 def _check_in_exudyn(cfg: PlayConfig, fld, motion, tasks: list[dict], rows: list[dict]) -> None:
@@ -433,10 +429,20 @@ def play(config: PlayConfig | None = None, **overrides) -> dict:
 
     started = time.perf_counter()
     cfg = with_overrides(PlayConfig, config, overrides).effective()
-    if cfg.robot not in robot_names() and not str(cfg.robot).endswith(".urdf"):
+    if cfg.robot not in robot_names() and ".urdf" not in str(cfg.robot):
         raise ValueError(f"unknown robot {cfg.robot!r}; known: {', '.join(robot_names())}")
     fld = load_field(cfg.field)
     load_robot(cfg.robot)  # a robot that does not load fails before any work
+    from .executors import open_executor
+
+    # the executor (a Dask scheduler too) is opened and checked before the long work starts
+    with open_executor(cfg.workers, cfg.dask) as ex:
+        return _play(cfg, fld, ex, started)
+
+
+def _play(cfg: PlayConfig, fld, ex, started: float) -> dict:
+    """The steps of :func:`play` with an open executor ``ex`` (``started``: the run's start,
+    for the total time in summary.txt)."""
     os.makedirs(os.path.join(cfg.out, "models"), exist_ok=True)
     times: dict[str, float] = {}
     rng = np.random.default_rng(cfg.seed)
@@ -461,7 +467,7 @@ def play(config: PlayConfig | None = None, **overrides) -> dict:
     t3 = time.perf_counter()
     balls, holes = _situations(fld, cfg.shots, rng)
     tasks = _round_tasks(cfg, fld, data, fitted, balls, holes, motion_dir)
-    rows = _play_round(cfg, tasks)
+    rows = _play_round(cfg, tasks, ex)
     times["round (robot + ball model)"] = time.perf_counter() - t3
     if cfg.validate_shots > 0:
         t4 = time.perf_counter()

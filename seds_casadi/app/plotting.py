@@ -361,3 +361,22 @@ def plot_arm_frames(robot, qs, ax=None, ball=None, colors=None, alpha_min: float
     ax.set_ylabel("y [m]")
     ax.set_zlabel("z [m]")
     return ax
+
+
+def plot_1d_reproductions(ds, demos, reproductions, ax=None, title=None):
+    """A 1-D DS (where :func:`plot_streamlines` has no plane to draw): position against time
+    of the demonstrations (dots) and of the reproductions from their starts (lines)."""
+    plt = _plt()
+    if ax is None:
+        _, ax = plt.subplots(figsize=(5, 4.5))
+    dt = demos.estimated_dt()
+    for p in demos.positions:
+        ax.plot(dt * np.arange(len(p)), p[:, 0], ".", color="tab:red", ms=2.5, alpha=0.7)
+    for r in reproductions:
+        r = np.asarray(r)
+        ax.plot(dt * np.arange(len(r)), r[:, 0], color="tab:blue", lw=1.2)
+    ax.axhline(float(ds.target[0]), color="k", lw=0.6, ls="--")
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("x")
+    ax.set_title(title or "1-D DS: demonstrations (dots), reproductions (lines)")
+    return ax

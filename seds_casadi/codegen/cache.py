@@ -153,8 +153,13 @@ def shared_library(source: bytes, prefix: str, flags: tuple[str, ...] = ("-O1",)
             return lib
         if os.path.exists(lib):
             _LOG.warning("cached library %s does not match its checksum; rebuilding it", lib)
-        os.makedirs(folder, exist_ok=True)
-        tmpdir = tempfile.mkdtemp(prefix=f"seds_{prefix}_")
+        try:
+            os.makedirs(folder, exist_ok=True)
+            _sweep_staged(folder)
+            tmpdir = tempfile.mkdtemp(prefix=f"seds_{prefix}_")
+        except OSError as exc:
+            raise CompileError(f"the compile cache {folder!r} cannot be written ({exc}); set "
+                               "SEDS_CASADI_CACHE to a writable folder") from None
         try:
             c_path = os.path.join(tmpdir, "k.c")
             with open(c_path, "wb") as fh:
@@ -166,15 +171,43 @@ def shared_library(source: bytes, prefix: str, flags: tuple[str, ...] = ("-O1",)
                               COMPILE_TIMEOUT if timeout is None else timeout)
             except OSError as exc:
                 raise CompileError(f"the C compiler could not run: {exc}") from None
-            digest = _digest(tmp_lib)
-            fd, staged = tempfile.mkstemp(prefix=".k-", suffix=".so", dir=folder)
-            os.close(fd)
-            shutil.copyfile(tmp_lib, staged)
-            os.replace(staged, lib)
-            fd, staged = tempfile.mkstemp(prefix=".k-", suffix=".sha256", dir=folder)
-            with os.fdopen(fd, "w") as fh:
-                fh.write(digest)
-            os.replace(staged, lib + ".sha256")
+            try:
+                _install(tmp_lib, lib, folder)
+            except OSError as exc:
+                raise CompileError(f"cannot store the library in the compile cache {folder!r} "
+                                   f"({exc})") from None
         finally:
             shutil.rmtree(tmpdir, ignore_errors=True)
         return lib
+
+
+def _install(tmp_lib: str, lib: str, folder: str) -> None:
+    """Copy a built library into the cache and record its digest, each by an atomic rename."""
+    digest = _digest(tmp_lib)
+    fd, staged = tempfile.mkstemp(prefix=".k-", suffix=".so", dir=folder)
+    os.close(fd)
+    shutil.copyfile(tmp_lib, staged)
+    os.replace(staged, lib)
+    fd, staged = tempfile.mkstemp(prefix=".k-", suffix=".sha256", dir=folder)
+    with os.fdopen(fd, "w") as fh:
+        fh.write(digest)
+    os.replace(staged, lib + ".sha256")
+
+
+#: staged files (``.k-*``) older than this many seconds are left-overs of a killed build
+STALE_SECONDS = 3600.0
+
+
+def _sweep_staged(folder: str) -> None:
+    """Remove staged copies a killed build left in the cache folder."""
+    import time
+
+    now = time.time()
+    for name in os.listdir(folder):
+        if name.startswith(".k-"):
+            p = os.path.join(folder, name)
+            try:
+                if now - os.path.getmtime(p) > STALE_SECONDS:
+                    os.unlink(p)
+            except OSError:
+                pass

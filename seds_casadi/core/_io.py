@@ -82,3 +82,22 @@ def data_folder(package: str) -> str:
     from importlib.resources import files
 
     return os.fspath(files(package))
+
+
+def npz_value_count(path: str | os.PathLike) -> int:
+    """Number of values in an ``.npz`` file, read from its arrays' headers (nothing is loaded,
+    so a size limit can be checked before allocating)."""
+    import zipfile
+
+    import numpy as np
+
+    total = 0
+    with zipfile.ZipFile(path) as z:
+        for name in z.namelist():
+            with z.open(name) as fh:
+                version = np.lib.format.read_magic(fh)
+                read = (np.lib.format.read_array_header_1_0 if version == (1, 0)
+                        else np.lib.format.read_array_header_2_0)
+                shape, _, _ = read(fh)
+                total += int(np.prod(shape, dtype=float))
+    return total

@@ -23,6 +23,9 @@ __all__ = ["Demonstrations", "load_demonstrations", "save_demonstrations"]
 
 # the file readers live in demo_files (one concept per module); re-exported here at the end
 
+#: largest magnitude of a position or velocity accepted (squares must stay finite in the solve)
+MAX_MAGNITUDE = 1e100
+
 
 def _as_demo_list(arrays, what: str) -> list[np.ndarray]:
     if isinstance(arrays, np.ndarray):
@@ -42,18 +45,34 @@ def _as_demo_list(arrays, what: str) -> list[np.ndarray]:
     out = []
     for n, a in enumerate(arrays):
         try:
+            kind = np.asarray(a).dtype.kind
+        except (TypeError, ValueError):  # ragged: the conversion below says so
+            kind = "O"
+        if kind == "c":
+            raise TypeError(f"{what}[{n}]: complex values; demonstrations are real (give the "
+                            "real part explicitly if that is what you mean)")
+        if kind in "USMm":
+            raise TypeError(f"{what}[{n}]: not a numeric array (dtype kind {kind!r}); give "
+                            "numbers")
+        try:
             a = np.asarray(a, dtype=float)
         except (TypeError, ValueError) as exc:
             raise TypeError(f"{what}[{n}]: not a numeric array ({exc})") from None
         if a.ndim == 1:
             a = a[:, None]
-        if a.ndim != 2:
-            raise ValueError(f"{what}[{n}]: expected shape (T_n, d), got {a.shape}")
+        if a.ndim != 2 or a.shape[1] == 0:
+            raise ValueError(f"{what}[{n}]: expected shape (T_n, d) with d >= 1, got {a.shape}")
         if not np.all(np.isfinite(a)):
             bad = int(np.argwhere(~np.isfinite(a))[0, 0])
             raise ValueError(
                 f"{what}[{n}]: contains NaN or infinite values (first at sample {bad}); "
                 "remove or interpolate those samples"
+            )
+        big = float(np.abs(a).max()) if a.size else 0.0
+        if big > MAX_MAGNITUDE:
+            raise ValueError(
+                f"{what}[{n}]: values up to {big:.3g} are too large to learn from (their squares "
+                f"overflow); rescale the data, e.g. to metres, below {MAX_MAGNITUDE:.0e}"
             )
         out.append(a)
     return out
@@ -110,6 +129,12 @@ def _finite_differences(pos: list[np.ndarray], dt: float | None, times) -> list[
 
 def _trim_standstill(pos, vel, trim_speed) -> tuple[list[np.ndarray], list[np.ndarray]]:
     """Drop leading and trailing samples slower than the threshold (SEDS's ``tol_cutting``)."""
+    for n, v in enumerate(vel):
+        if not np.all(np.isfinite(v)) or float(np.abs(v).max()) > MAX_MAGNITUDE:
+            raise ValueError(
+                f"velocities[{n}]: NaN, infinite or above {MAX_MAGNITUDE:.0e} (from finite "
+                "differences of positions too large or a time step too small); rescale the data"
+            )
     speeds = [np.linalg.norm(v, axis=1) for v in vel]
     vmax = max(float(s.max()) for s in speeds)
     if not vmax > 0.0:

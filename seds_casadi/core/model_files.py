@@ -19,12 +19,14 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ._io import atomic_npz
+from ._io import atomic_npz, npz_value_count
 from .errors import ModelFileError
 
 __all__ = ["write_guarded", "read_guarded", "checksum"]
 
 _RESERVED = ("format", "version", "meta", "checksum")
+#: most values a guarded file may hold (checked from the headers before anything is loaded)
+MAX_VALUES = 100_000_000
 
 
 def checksum(arrays: list[np.ndarray], meta_json: str) -> str:
@@ -70,7 +72,8 @@ def write_guarded(path: str | os.PathLike, kind: str, version: int,
 
 
 def read_guarded(path: str | os.PathLike, kind: str, versions: tuple[int, ...],
-                 schema: dict[str, int | None], meta_key: str = "meta"
+                 schema: dict[str, int | None | tuple[int | None, str]] | Callable,
+                 meta_key: str = "meta"
                  ) -> tuple[dict[str, np.ndarray], dict, int]:
     """Read and verify a file written by :func:`write_guarded`.
 
@@ -81,9 +84,11 @@ def read_guarded(path: str | os.PathLike, kind: str, versions: tuple[int, ...],
         The expected ``format``.
     versions : tuple of int
         Versions this reader understands.
-    schema : dict of name -> ndim or None
-        The float arrays the file must hold, in checksum order, with their number of dimensions
-        (None: any).
+    schema : dict of name -> ndim or None, or (ndim or None, kinds)
+        The arrays the file must hold, in checksum order, with their number of dimensions
+        (None: any) and the dtype kinds allowed (default ``"f"``, float; ``"i"`` integer); or
+        a function of the file's (checksummed) meta giving that dict, for files whose arrays
+        depend on it.
     meta_key : str
 
     Returns
@@ -101,40 +106,53 @@ def read_guarded(path: str | os.PathLike, kind: str, versions: tuple[int, ...],
     """
     path = os.fspath(path)
     try:
+        size = npz_value_count(path)
+        if size > MAX_VALUES:
+            raise ValueError(f"{size:.0f} values, more than the {MAX_VALUES} a model file holds")
         with np.load(path, allow_pickle=False) as f:
             data = {k: f[k] for k in f.files}
     except FileNotFoundError:
         raise
     except Exception as exc:  # noqa: BLE001 - any reader failure means a bad file
         raise ModelFileError(f"{path}: not a readable {kind} file ({exc})") from None
-    missing = [k for k in ("format", "version", *schema, meta_key, "checksum") if k not in data]
+    missing = [k for k in ("format", "version", meta_key, "checksum") if k not in data]
     if missing:
         raise ModelFileError(f"{path}: missing entries {missing}; not a complete {kind} file "
                              "(written by an older version without a checksum? save it again)")
     if str(data["format"]) != kind:
         raise ModelFileError(f"{path}: format {str(data['format'])!r} is not {kind!r}")
-    try:
-        version = int(data["version"])
-    except (TypeError, ValueError):
-        raise ModelFileError(f"{path}: entry 'version' is not an integer") from None
+    if data["version"].dtype.kind not in "iu" or data["version"].shape != ():
+        raise ModelFileError(f"{path}: entry 'version' is not an integer")
+    version = int(data["version"])
     if version not in versions:
         raise ModelFileError(f"{path}: version {version} is not supported (this library reads "
                              f"version {', '.join(map(str, versions))})")
-    for name, ndim in schema.items():
+    meta_json = str(data[meta_key])
+    try:
+        meta = json.loads(meta_json)
+    except (json.JSONDecodeError, RecursionError) as exc:
+        raise ModelFileError(f"{path}: entry {meta_key!r} is not valid JSON ({exc})") from None
+    if not isinstance(meta, dict):
+        raise ModelFileError(f"{path}: entry {meta_key!r} is not a JSON object")
+    if callable(schema):
+        try:
+            schema = schema(meta)
+        except (KeyError, TypeError, ValueError) as exc:
+            raise ModelFileError(f"{path}: entry {meta_key!r} does not describe the file's "
+                                 f"arrays ({type(exc).__name__}: {exc})") from None
+    missing = [k for k in schema if k not in data]
+    if missing:
+        raise ModelFileError(f"{path}: missing entries {missing}; not a complete {kind} file")
+    for name, spec in schema.items():
+        ndim, kinds = spec if isinstance(spec, tuple) else (spec, "f")
         a = data[name]
-        if a.dtype.kind != "f":
-            raise ModelFileError(f"{path}: entry {name!r} is not a float array ({a.dtype})")
+        if a.dtype.kind not in kinds:
+            what = {"f": "a float", "i": "an integer"}.get(kinds, f"a {kinds!r}")
+            raise ModelFileError(f"{path}: entry {name!r} is not {what} array ({a.dtype})")
         if ndim is not None and a.ndim != ndim:
             raise ModelFileError(f"{path}: entry {name!r} has {a.ndim} dimensions, not {ndim}")
         if not np.all(np.isfinite(a)):
             raise ModelFileError(f"{path}: entry {name!r} holds NaN or infinite values")
-    meta_json = str(data[meta_key])
     if checksum([data[k] for k in schema], meta_json) != str(data["checksum"]):
         raise ModelFileError(f"{path}: checksum mismatch; the file is corrupt or was edited")
-    try:
-        meta = json.loads(meta_json)
-    except json.JSONDecodeError as exc:
-        raise ModelFileError(f"{path}: entry {meta_key!r} is not valid JSON ({exc})") from None
-    if not isinstance(meta, dict):
-        raise ModelFileError(f"{path}: entry {meta_key!r} is not a JSON object")
     return {k: data[k] for k in schema}, meta, version

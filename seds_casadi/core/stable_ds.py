@@ -201,6 +201,9 @@ class StableDS(CachedFunctionMixin):
             np.linalg.solve(self.covariances[k, :d, :d].T, self.covariances[k, d:, :d].T).T
             for k in range(K)
         ])
+        if fit_info is not None and not isinstance(fit_info, dict):
+            raise TypeError(f"fit_info must be a dict (the fit's report), got "
+                            f"{type(fit_info).__name__}")
         self.fit_info = dict(fit_info or {})
 
     @property

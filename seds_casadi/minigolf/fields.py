@@ -52,6 +52,12 @@ Surface shapes (``"shape"`` and its parameters):
 * ``"heightmap"``: ``extent`` [xmin, xmax, ymin, ymax] and ``heights`` (rows along y, columns
   along x), interpolated by a bicubic spline.
 
+Every entry is checked before the field is built (:mod:`seds_casadi.minigolf.field_schema`):
+an unknown or misspelt entry is an error with a "did you mean" (``"description"`` holds free
+text), as are entries of the wrong JSON type and sizes beyond the limits listed there (a field
+at most 100 m on a side, at most 5000 bumps, a 1 cm table of a rough or height-map surface of
+at most a million points).
+
 The surface itself (its shapes' formulas, derivatives and CasADi form) is
 :class:`~seds_casadi.minigolf.surface.Surface`.
 
@@ -69,6 +75,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core._io import data_folder
+from .field_schema import MAX_FILE_BYTES, check_field_spec, did_you_mean
 from .situations import Situations
 from .surface import Surface
 
@@ -142,8 +149,7 @@ class Field:
     @classmethod
     def from_dict(cls, spec: dict, source: str = "field") -> Field:
         """Validate a field specification and build the field; errors name the entry."""
-        if not isinstance(spec, dict):
-            raise ValueError(f"{source}: a field is a JSON object, got {type(spec).__name__}")
+        check_field_spec(spec, source)
         for key in ("name", "surface", "bounds", "hole", "ball_region"):
             if key not in spec:
                 raise ValueError(f"{source}: missing entry {key!r}")
@@ -172,15 +178,22 @@ class Field:
             if not (np.isfinite(rho) and rho >= 0):
                 raise ValueError(f"{source}: rolling_resistance must be >= 0, got {rho}")
         elif "stimp" in spec:
-            rho = stimp_to_rho(spec["stimp"])
+            try:
+                rho = stimp_to_rho(spec["stimp"])
+            except ValueError as exc:
+                raise ValueError(f"{source}: {exc}") from None
         else:
             raise ValueError(f"{source}: missing entry 'stimp' or 'rolling_resistance'")
         e = float(spec.get("wall_restitution", 0.6))
         if not 0 <= e <= 1:
             raise ValueError(f"{source}: wall_restitution must be in [0, 1], got {e}")
-        surface = Surface.from_spec(spec["surface"], list(bounds), f"{source}: surface")
-        situations = Situations.from_spec(spec.get("situations"), hxy, region, bounds, hr,
-                                          surface.shape, source)
+        try:
+            surface = Surface.from_spec(spec["surface"], list(bounds), f"{source}: surface")
+            situations = Situations.from_spec(spec.get("situations"), hxy, region, bounds, hr,
+                                              surface.shape, source)
+        except (TypeError, KeyError, IndexError, AttributeError) as exc:
+            raise ValueError(f"{source}: surface or situations: an entry of the wrong type "
+                             f"({type(exc).__name__}: {exc}); see the field format") from None
         teacher = _teacher_settings(spec.get("teacher", {}), f"{source}: teacher")
         return cls(str(spec["name"]), surface, bounds, boundary, hxy, hr, region, rho, e, spec,
                    situations, teacher)
@@ -255,11 +268,21 @@ def load_field(name_or_path: str | os.PathLike) -> Field:
     s = os.fspath(name_or_path)
     path = s if (s.endswith(".json") or os.sep in s) else os.path.join(FIELDS_FOLDER, s + ".json")
     if not os.path.exists(path):
-        raise ValueError(f"no field {s!r}: give a path to a .json field file or one of "
+        hint = did_you_mean(s, field_names()) if path.startswith(FIELDS_FOLDER) else ""
+        raise ValueError(f"no field {s!r}{hint}: give a path to a .json field file or one of "
                          f"{', '.join(field_names())}")
+    if os.path.isdir(path):
+        raise ValueError(f"{path} is a folder; give a .json field file or a field name")
+    if os.path.getsize(path) > MAX_FILE_BYTES:
+        raise ValueError(f"{path}: {os.path.getsize(path)} bytes; a field file may have at most "
+                         f"{MAX_FILE_BYTES}")
     try:
-        with open(path, encoding="utf-8") as fh:
+        with open(path, encoding="utf-8-sig") as fh:
             spec = json.load(fh)
-    except json.JSONDecodeError as exc:
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise ValueError(f"{path}: not valid JSON ({exc})") from None
+    except RecursionError:
+        raise ValueError(f"{path}: nested too deeply to be a field file") from None
+    except OSError as exc:
+        raise ValueError(f"{path}: cannot be read ({exc.strerror})") from None
     return Field.from_dict(spec, source=os.path.basename(path))

@@ -5,21 +5,25 @@ field's declared situations) and the data set of the teacher's hitting parameter
 
 from __future__ import annotations
 
-import json
 import os
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core._io import atomic_npz
-from .fields import Field
+from ..core.errors import ModelFileError
+from ..core.model_files import read_guarded, write_guarded
+from .fields import TEACHER_STRATEGIES, Field
 from .stroke import Stroke
 
-__all__ = ["HittingDataset", "paper_situations", "region_centre", "DATASET_VERSION"]
+__all__ = ["HittingDataset", "paper_situations", "region_centre", "DATASET_VERSION",
+           "DATASET_FORMAT"]
 
-#: version of the ``.npz`` format written by :meth:`HittingDataset.save` (1: the angle in
-#: radians under ``alpha``, read too; 2: ``alpha_deg``, strategy labels, the situations)
-DATASET_VERSION = 2
+#: version of the guarded ``.npz`` format written by :meth:`HittingDataset.save` (1 and 2, of
+#: earlier releases, had no checksum and are refused: regenerate them)
+DATASET_VERSION = 3
+#: the ``format`` entry of a data set file
+DATASET_FORMAT = "seds_casadi.HittingDataset"
+_SCHEMA = {"ball": 2, "hole": 2, "alpha_deg": 1, "kappa": 1, "labels": (1, "i")}
 
 
 def region_centre(region) -> np.ndarray:
@@ -105,36 +109,53 @@ class HittingDataset:
                               self.labels[k], dict(self.declared))
 
     def save(self, path: str | os.PathLike) -> None:
-        """Write an ``.npz`` file (atomic; no pickle): ``ball``, ``hole`` [m], ``alpha_deg``
-        [deg], ``kappa``, ``labels`` and a JSON ``meta`` (version, field, strategy, dropped,
-        stroke, situations)."""
-        meta = {"version": DATASET_VERSION, "field": self.field, "strategy": self.strategy,
-                "dropped": self.dropped, "stroke": self.stroke.to_dict(),
-                "situations": self.declared}
-        atomic_npz(path, ball=self.ball, hole=self.hole, alpha_deg=self.alpha_deg,
-                   kappa=self.kappa, labels=self.labels, meta=np.array(json.dumps(meta)))
+        """Write a guarded ``.npz`` file (:mod:`seds_casadi.core.model_files`: format, version,
+        checksum; atomic; no pickle): ``ball``, ``hole`` [m], ``alpha_deg`` [deg], ``kappa``,
+        ``labels`` and a JSON ``meta`` (field, strategy, dropped, stroke, situations)."""
+        meta = {"field": self.field, "strategy": self.strategy, "dropped": int(self.dropped),
+                "stroke": self.stroke.to_dict(), "situations": self.declared}
+        write_guarded(path, DATASET_FORMAT, DATASET_VERSION,
+                      {"ball": self.ball, "hole": self.hole, "alpha_deg": self.alpha_deg,
+                       "kappa": self.kappa, "labels": np.asarray(self.labels, np.int64)}, meta)
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> HittingDataset:
-        """Read a file written by :meth:`save` (also version 1, with the angle in radians)."""
-        try:
-            with np.load(path, allow_pickle=False) as z:
-                meta = json.loads(str(z["meta"]))
-                version = int(meta.get("version", 1))
-                if version > DATASET_VERSION:
-                    raise ValueError(f"version {version} is newer than this library's "
-                                     f"({DATASET_VERSION})")
-                alpha = np.deg2rad(z["alpha_deg"]) if version >= 2 else z["alpha"]
-                labels = z["labels"] if "labels" in z else None
-                st = meta["stroke"]
-                out = cls(meta["field"], meta["strategy"], z["ball"], z["hole"], alpha,
-                          z["kappa"], Stroke(np.array(st["direction"]), st["speed"],
-                                             st["club_mass"], st["restitution"]),
-                          int(meta["dropped"]), labels, meta.get("situations", {}))
-        except (OSError, KeyError, ValueError, TypeError) as exc:
-            raise ValueError(f"{path}: not a hitting data set ({exc})") from None
-        n = len(out.alpha)
-        if not (out.ball.shape == out.hole.shape == (n, 2) and out.kappa.shape == (n,)
-                and out.labels.shape == (n,)):
-            raise ValueError(f"{path}: not a hitting data set (arrays of different lengths)")
-        return out
+        """Read a file written by :meth:`save`: format, version and checksum are checked and
+        the contents re-validated (shapes, finite values, positive speed gains, angles within
+        +-180 deg, a valid stroke and strategy); anything wrong raises
+        :class:`~seds_casadi.ModelFileError` naming the file and the entry."""
+        path = os.fspath(path)
+        a, meta, _ = read_guarded(path, DATASET_FORMAT, (DATASET_VERSION,), _SCHEMA)
+        return _validated(path, a, meta)
+
+
+def _validated(path: str, a: dict, meta: dict) -> HittingDataset:
+    """A data set from a guarded file's arrays and meta, re-validated."""
+    n = len(a["alpha_deg"])
+    if not (a["ball"].shape == a["hole"].shape == (n, 2) and a["kappa"].shape == (n,)
+            and a["labels"].shape == (n,)):
+        raise ModelFileError(f"{path}: not a hitting data set (arrays of different lengths)")
+    if np.any(a["kappa"] <= 0) or np.any(np.abs(a["alpha_deg"]) > 180):
+        raise ModelFileError(f"{path}: speed gains must be positive and angles within +-180 deg")
+    if np.any(a["labels"] < 0):
+        raise ModelFileError(f"{path}: entry 'labels' holds negative strategy labels")
+    try:
+        st = meta["stroke"]
+        stroke = Stroke(np.array(st["direction"], float), float(st["speed"]),
+                        float(st["club_mass"]), float(st["restitution"]))
+        if not (stroke.club_mass > 0 and 0 <= stroke.restitution <= 1):
+            raise ValueError("club_mass must be positive and restitution in [0, 1]")
+        strategy, field_name = meta["strategy"], meta["field"]
+        if strategy not in TEACHER_STRATEGIES or not isinstance(field_name, str):
+            raise ValueError(f"unknown strategy {strategy!r} or field {field_name!r}")
+        dropped = meta["dropped"]
+        if not isinstance(dropped, int) or dropped < 0:
+            raise ValueError(f"'dropped' must be a count, got {dropped!r}")
+        declared = meta.get("situations", {})
+        if not isinstance(declared, dict):
+            raise ValueError("'situations' must be an object")
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ModelFileError(f"{path}: entry 'meta' is not a valid hitting data set "
+                             f"({type(exc).__name__}: {exc})") from None
+    return HittingDataset(field_name, strategy, a["ball"], a["hole"], np.deg2rad(a["alpha_deg"]),
+                          a["kappa"], stroke, dropped, a["labels"], declared)

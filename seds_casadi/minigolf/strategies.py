@@ -33,13 +33,11 @@ Labels are ordered by the strategies' mean hitting speed (0: the slowest).
 
 from __future__ import annotations
 
-import json
 import os
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core._io import atomic_npz
 from .ball import simulate_shots
 from .fields import Field
 from .hitting_data import HittingDataset
@@ -299,38 +297,18 @@ class StrategySet:
         return out
 
     def save(self, path: str | os.PathLike) -> None:
-        """Write an ``.npz`` file (atomic; no pickle; angles in degrees)."""
-        arrays = {"ball": self.ball, "hole": self.hole, "robustness": self.robustness}
-        for s in self.strategies:
-            d = s.data
-            arrays[f"s{s.label}_ball"], arrays[f"s{s.label}_hole"] = d.ball, d.hole
-            arrays[f"s{s.label}_alpha_deg"], arrays[f"s{s.label}_kappa"] = d.alpha_deg, d.kappa
-        meta = {"version": 1, "field": self.field, "stroke": self.stroke.to_dict(),
-                "settings": self.settings, "walls": [s.walls for s in self.strategies],
-                "routes": [s.routes for s in self.strategies]}
-        atomic_npz(path, meta=np.array(json.dumps(meta)), **arrays)
+        """Write a guarded ``.npz`` file (:mod:`~seds_casadi.minigolf.strategy_files`)."""
+        from .strategy_files import save_strategies
+
+        save_strategies(path, self)
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> StrategySet:
-        """Read a file written by :meth:`save`."""
-        try:
-            with np.load(path, allow_pickle=False) as z:
-                meta = json.loads(str(z["meta"]))
-                st = meta["stroke"]
-                stroke = Stroke(np.array(st["direction"]), st["speed"], st["club_mass"],
-                                st["restitution"])
-                R = z["robustness"]
-                strategies = []
-                for k, w in enumerate(meta["walls"]):
-                    n = len(z[f"s{k}_kappa"])
-                    d = HittingDataset(meta["field"], "centre", z[f"s{k}_ball"],
-                                       z[f"s{k}_hole"], np.deg2rad(z[f"s{k}_alpha_deg"]),
-                                       z[f"s{k}_kappa"], stroke, labels=np.full(n, k))
-                    strategies.append(Strategy(k, int(w), d, R[:, k], list(meta["routes"][k])))
-                return cls(meta["field"], z["ball"], z["hole"], strategies, stroke,
-                           meta["settings"])
-        except (OSError, KeyError, ValueError, TypeError) as exc:
-            raise ValueError(f"{path}: not a strategy set ({exc})") from None
+        """Read and re-validate a file written by :meth:`save` (a
+        :class:`~seds_casadi.ModelFileError` for anything wrong)."""
+        from .strategy_files import load_strategies
+
+        return load_strategies(path)
 
 
 def _order(S: np.ndarray) -> np.ndarray:

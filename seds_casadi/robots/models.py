@@ -168,7 +168,8 @@ def _attach_club(model, flange: str, club: Club):
 
 def load_robot(name_or_path: str, club: Club | None = None, base=(0.0, 0.0, 0.0, 0.0),
                flange: str | None = None, q_home=None, field=None) -> Robot:
-    """A robot by name (:func:`robot_names`) or a URDF file (then give ``flange``).
+    """A robot by name (:func:`robot_names`) or a URDF file (``FILE.urdf#LINK`` or ``flange``
+    names the link that holds the club; default: the last link of the arm's only chain).
 
     Parameters
     ----------
@@ -178,8 +179,9 @@ def load_robot(name_or_path: str, club: Club | None = None, base=(0.0, 0.0, 0.0,
     base : (x, y, z, yaw)
         The base's placement on the field [m, rad].
     flange, q_home : optional
-        The frame the club is attached to and a home configuration (required for a URDF path
-        that is not one of the known robots; q_home defaults to the middle of the limits).
+        The frame the club is attached to (for a URDF path that is not one of the known
+        robots: this, else ``#LINK`` after the path, else the tip of its only chain) and a home
+        configuration (default: the middle of the limits).
     field : Field, optional
         The field the robot stands on: its base must not be below the field's surface there.
     """
@@ -193,11 +195,10 @@ def load_robot(name_or_path: str, club: Club | None = None, base=(0.0, 0.0, 0.0,
     elif name in _ERD_ARMS:
         rel, fl, home = _ERD_ARMS[name]
         path = os.path.join(_erd_root(), rel)
-    elif s.endswith(".urdf") or os.sep in s:
-        path, fl, home = s, flange, q_home
-        name = os.path.splitext(os.path.basename(s))[0]
-        if fl is None:
-            raise ValueError("a URDF file needs flange=FRAME, the frame that holds the club")
+    elif ".urdf" in s or os.sep in s:
+        path, _, link = s.partition(".urdf#")  # FILE.urdf#LINK names the flange
+        path, fl, home = (path + ".urdf" if link else s), flange or link or None, q_home
+        name = os.path.splitext(os.path.basename(path))[0]
         if not os.path.exists(path):
             raise ValueError(f"no URDF file {path!r}")
     else:
@@ -213,7 +214,7 @@ def load_robot(name_or_path: str, club: Club | None = None, base=(0.0, 0.0, 0.0,
                                                                n.lower())]
     if lock:
         model = pin.buildReducedModel(model, lock, pin.neutral(model))
-    fl = flange or fl
+    fl = flange or fl or _tip_link(model, path)
     club = club or DEFAULT_CLUBS.get(name, Club())
     head = _attach_club(model, fl, club)
     if home is None:
@@ -225,6 +226,25 @@ def load_robot(name_or_path: str, club: Club | None = None, base=(0.0, 0.0, 0.0,
     robot = Robot(name, model, head, home, base, club, effort_excludes_gravity=name == "katana")
     _check_base(robot, field)
     return robot
+
+
+def _tip_link(model, path: str) -> str:
+    """The flange of a URDF given without one: the last link of its only chain's tip (a
+    ``ValueError`` naming the tips when the arm branches)."""
+    import pinocchio as pin
+
+    parents = set(model.parents[1:])
+    tips = [j for j in range(1, model.njoints) if j not in parents]
+    if len(tips) != 1:
+        names = [model.names[j] for j in tips]
+        raise ValueError(f"{path}: the arm branches (tip joints {names}); name the link that "
+                         f"holds the club: flange=LINK, or on the command line FILE.urdf#LINK")
+    bodies = [f.name for f in model.frames
+              if f.parentJoint == tips[0] and f.type == pin.FrameType.BODY]
+    if not bodies:
+        raise ValueError(f"{path}: no link after the joint {model.names[tips[0]]!r}; give "
+                         "flange=LINK (FILE.urdf#LINK on the command line)")
+    return bodies[-1]
 
 
 def _revolute_only(text: str) -> str:

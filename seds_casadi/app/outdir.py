@@ -1,0 +1,107 @@
+"""The output folder of a command (``--out``): checked, locked and swept before any work.
+
+:func:`output_folder` makes sure the folder can be written before a command spends minutes on
+work it could not save (a path that is a file, lies under a file or is not writable is a
+``ValueError`` naming it), holds an exclusive lock on it for the command's duration (a second run
+on the same folder is refused at once instead of mixing its outputs with the first's; the
+lock file is removed at the end, and so is the folder if the command made it and left it
+empty) and removes the temporary files (``.tmp-*``, written by :mod:`seds_casadi.core._io`
+before an atomic rename) that a killed run left behind: while the lock is held no other run
+can be writing them.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import errno
+import fcntl
+import os
+from collections.abc import Iterator
+
+__all__ = ["output_folder", "LOCK_NAME", "sweep_temporary_files"]
+
+#: name of the lock file inside an output folder
+LOCK_NAME = ".seds-casadi.lock"
+
+
+def _check_writable(path: str) -> None:
+    """A ``ValueError`` naming ``path`` when it cannot be (made into) a writable folder."""
+    if os.path.exists(path) and not os.path.isdir(path):
+        raise ValueError(f"--out {path!r} is a file, not a folder; give a folder path "
+                         f"(it is created if missing)")
+    parent = path
+    while parent and not os.path.exists(parent):
+        parent = os.path.dirname(parent.rstrip(os.sep)) or "."
+    if parent and not os.path.isdir(parent):
+        raise ValueError(f"--out {path!r} lies under {parent!r}, which is a file; give a "
+                         f"folder path")
+    try:
+        os.makedirs(path, exist_ok=True)
+    except OSError as exc:
+        raise ValueError(f"--out {path!r}: cannot create the folder ({exc.strerror}); choose "
+                         f"another place") from None
+    if not os.access(path, os.W_OK | os.X_OK):
+        raise ValueError(f"--out {path!r} is not writable; choose another folder or change "
+                         f"its permissions")
+
+
+def sweep_temporary_files(path: str) -> list[str]:
+    """Remove ``.tmp-*`` files under ``path`` (left by a killed run); returns their paths."""
+    removed = []
+    for root, _, files in os.walk(path):
+        for name in files:
+            if name.startswith(".tmp-"):
+                p = os.path.join(root, name)
+                with contextlib.suppress(OSError):
+                    os.unlink(p)
+                    removed.append(p)
+    return removed
+
+
+@contextlib.contextmanager
+def output_folder(path: str | os.PathLike) -> Iterator[str]:
+    """Check, create and lock the output folder ``path`` for a ``with`` block.
+
+    Raises
+    ------
+    ValueError
+        ``path`` is a file, under a file or not writable, or another run holds its lock.
+    """
+    path = os.fspath(path)
+    created = not os.path.exists(path)
+    _check_writable(path)
+    lock_path = os.path.join(path, LOCK_NAME)
+    try:
+        fd = os.open(lock_path, os.O_RDWR | os.O_CREAT, 0o644)
+    except OSError as exc:
+        raise ValueError(f"--out {path!r}: cannot create its lock file ({exc.strerror})") from None
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as exc:
+            if exc.errno not in (errno.EAGAIN, errno.EACCES, errno.EWOULDBLOCK):
+                raise
+            other = os.pread(fd, 64, 0).decode(errors="replace").strip() or "?"
+            raise ValueError(f"--out {path!r} is in use by another seds-casadi run (pid "
+                             f"{other}); wait for it to finish or choose another folder") \
+                from None
+        try:  # the lock file may have been removed by the run that held it just now
+            same = os.stat(lock_path).st_ino == os.fstat(fd).st_ino
+        except OSError:
+            same = False
+        if not same:
+            raise ValueError(f"--out {path!r} was in use by another seds-casadi run a moment "
+                             "ago; run again")
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, str(os.getpid()).encode(), 0)
+        sweep_temporary_files(path)
+        try:
+            yield path
+        finally:  # no leftovers: the lock file goes, and a folder made for nothing too
+            with contextlib.suppress(OSError):
+                os.unlink(lock_path)
+            if created:
+                with contextlib.suppress(OSError):
+                    os.rmdir(path)  # only if empty
+    finally:
+        os.close(fd)  # releases the lock
