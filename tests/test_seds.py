@@ -384,3 +384,29 @@ def test_direction_objective_moves_at_the_demonstrated_speeds(shape):
             assert info["converged"].all()
     assert 0.8 <= ratios["median"] <= 1.25
     assert ratios["least-squares"] < 0.8  # the former calibration, for contrast
+
+
+def test_predict_is_finite_and_scales_linearly_far_from_the_data(fitted):
+    """Issue 18 class 7: NaN at 1e200 before (inf - inf in the Gaussians' exponents). Far away
+    the weights depend only on the direction, so f grows linearly with the distance."""
+    model = fitted["angle", "mse"]
+    u = np.array([0.6, -0.8])
+    ref = model.predict(model.target + 1e8 * u) / 1e8
+    for s in (1e20, 1e100, 1e200, 1e300):
+        f = model.predict(model.target + s * u)
+        assert np.all(np.isfinite(f))
+        np.testing.assert_allclose(f / s, ref, rtol=1e-6)
+    x = ca.SX.sym("x", 2)
+    J = ca.Function("J", [x], [ca.jacobian(model.velocity_sx(x), x)])(model.target)
+    assert np.all(np.isfinite(np.asarray(J)))
+
+
+def test_rollout_warns_when_its_step_cannot_follow_the_stiffest_component(fitted):
+    model = fitted["angle", "mse"]
+    rate = model.stiffness()
+    x0 = model.target + np.array([1.0, 0.5])
+    with pytest.warns(ConvergenceWarning, match="stiffest component"):
+        model.rollout(x0, dt=2.5 / rate, method="euler", max_steps=5)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ConvergenceWarning)
+        model.rollout(x0, dt=1.0 / rate, method="euler", max_steps=100000)

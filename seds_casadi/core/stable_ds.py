@@ -39,6 +39,10 @@ VERSION = 1
 VERSION_LYAPUNOV = 2
 _SCHEMA = {"priors": 1, "means": 2, "covariances": 3, "target": 1}
 _SCHEMA_LYAPUNOV = {**_SCHEMA, "lyapunov": 2}
+#: beyond this many times the data's extent, Eq. 6 is evaluated at that distance (velocity_sx)
+FAR_FACTOR = 1e6
+#: largest stable step of explicit Euler and RK4 for a rate lambda: dt * lambda below these
+_STABLE_STEP = {"euler": 2.0, "rk4": 2.78}
 
 
 def certify(
@@ -282,6 +286,13 @@ class StableDS(CachedFunctionMixin):
             raise ValueError(f"dt must be positive, got {dt}")
         if method not in ("rk4", "euler"):
             raise ValueError(f"unknown method {method!r}; valid: rk4, euler")
+        rate = self.stiffness()
+        if warn and dt * rate >= _STABLE_STEP[method]:
+            warnings.warn(
+                f"{method} at dt = {dt:g} s cannot follow this model's stiffest component (rate "
+                f"{rate:.3g}/s; stable only for dt < {_STABLE_STEP[method] / rate:.3g} s): "
+                "the rollout may oscillate or diverge. Use a smaller dt, method='rk4', or fit "
+                "with SEDS(gain_limit=...)", ConvergenceWarning, stacklevel=2)
         dist0 = np.linalg.norm(X - self.target, axis=1)
         if tol is None:
             tol = 1e-3 * max(float(dist0.max()), 1e-12)
@@ -331,12 +342,33 @@ class StableDS(CachedFunctionMixin):
         target field (Eq. 8) divides by ||f||.
         """
         d = self.n_dims
-        h = responsibilities_sx(x, self.priors, self.means[:, :d], self.covariances[:, :d, :d])
         e = x - ca.DM(self.target)
+        # far from the data (beyond FAR_FACTOR times its extent) the weights are taken at the
+        # point pulled radially back to that distance: the Gaussians' exponents would overflow
+        # (NaN from inf - inf at 1e200) while the weights there already depend only on the
+        # direction; the expression is unchanged within that distance
+        R = self._far_radius()
+        s = R / ca.fmax(ca.mmax(ca.fabs(e)), R)  # max-norm: no overflow, no 0/0 at x*
+        h = responsibilities_sx(ca.DM(self.target) + s * e, self.priors, self.means[:, :d],
+                                self.covariances[:, :d, :d])
         f = ca.SX.zeros(d, 1)
         for k in range(self.n_components):
             f = f + h[k] * (ca.DM(self.A[k]) @ e)
         return f
+
+    def _far_radius(self) -> float:
+        """FAR_FACTOR times the data's extent: the largest distance of a component's mean
+        from the target plus its standard deviation."""
+        d = self.n_dims
+        ext = max(float(np.linalg.norm(self.means[k, :d] - self.target)
+                        + np.sqrt(np.trace(self.covariances[k, :d, :d])))
+                  for k in range(self.n_components))
+        return FAR_FACTOR * max(ext, 1e-300)
+
+    def stiffness(self) -> float:
+        """The largest |eigenvalue| of any A_k [1/s]: explicit Euler needs dt < 2 / stiffness,
+        RK4 dt < 2.78 / stiffness, to follow the model near that component."""
+        return float(max(np.abs(np.linalg.eigvals(A)).max() for A in self.A))
 
     def to_casadi(self, name: str = "seds_f") -> ca.Function:
         """Eq. 5 (:meth:`velocity_sx`) as a CasADi Function x (d,) -> f(x) (d,), for code
