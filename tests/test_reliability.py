@@ -520,3 +520,16 @@ def test_a_urdf_without_a_flange_takes_its_chains_tip():
         assert f.parentJoint == g.parentJoint and f.placement.isApprox(g.placement)
     with pytest.raises(ValueError, match="no frame 'nolink'"):
         load_robot(path + "#nolink")
+
+
+def test_guarded_metadata_takes_numpy_values_and_refuses_others(tmp_path):
+    """One JSON encoder for every guarded file (core.model_files.numpy_json)."""
+    from seds_casadi.core.model_files import read_guarded, write_guarded
+
+    meta = {"k": np.int64(3), "x": np.float32(0.5), "v": np.arange(3)}
+    write_guarded(tmp_path / "m.npz", "t", 1, {"a": np.ones(2)}, meta)
+    _, back, _ = read_guarded(tmp_path / "m.npz", "t", (1,), {"a": 1})
+    assert back == {"k": 3, "x": 0.5, "v": [0, 1, 2]}
+    with pytest.raises(TypeError, match="set is not JSON serialisable"):
+        write_guarded(tmp_path / "n.npz", "t", 1, {"a": np.ones(2)}, {"s": {1, 2}})
+    assert not (tmp_path / "n.npz").exists()

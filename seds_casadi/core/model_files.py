@@ -22,11 +22,21 @@ import numpy as np
 from ._io import atomic_npz, npz_value_count
 from .errors import ModelFileError
 
-__all__ = ["write_guarded", "read_guarded", "checksum"]
+__all__ = ["write_guarded", "read_guarded", "checksum", "numpy_json"]
 
 _RESERVED = ("format", "version", "meta", "checksum")
 #: most values a guarded file may hold (checked from the headers before anything is loaded)
 MAX_VALUES = 100_000_000
+
+
+def numpy_json(value):
+    """``default`` of :func:`json.dumps` for metadata: numpy scalars and arrays as plain
+    numbers and lists; anything else is refused."""
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    raise TypeError(f"{type(value).__name__} is not JSON serialisable")
 
 
 def checksum(arrays: list[np.ndarray], meta_json: str) -> str:
@@ -58,12 +68,13 @@ def write_guarded(path: str | os.PathLike, kind: str, version: int,
     meta_key : str
         Entry name of the JSON text (``"fit_info"`` for a StableDS).
     json_default : callable, optional
-        ``default`` of :func:`json.dumps` for values JSON does not know (numpy scalars, ...).
+        ``default`` of :func:`json.dumps` for values JSON does not know (default:
+        :func:`numpy_json`, numpy scalars and arrays as plain numbers and lists).
     """
     bad = [k for k in arrays if k in _RESERVED or k == meta_key]
     if bad:
         raise ValueError(f"array names {bad} are reserved")
-    meta_json = json.dumps(meta or {}, sort_keys=True, default=json_default)
+    meta_json = json.dumps(meta or {}, sort_keys=True, default=json_default or numpy_json)
     entries = {"format": np.array(kind), "version": np.array(int(version)),
                **{k: np.asarray(v) for k, v in arrays.items()},
                meta_key: np.array(meta_json),

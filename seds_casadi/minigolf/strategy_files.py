@@ -29,16 +29,7 @@ def save_strategies(path: str | os.PathLike, ss) -> None:
     meta = {"field": ss.field, "stroke": ss.stroke.to_dict(), "settings": ss.settings,
             "walls": [int(s.walls) for s in ss.strategies],
             "routes": [list(s.routes) for s in ss.strategies]}
-    write_guarded(path, STRATEGIES_FORMAT, STRATEGIES_VERSION, arrays, meta,
-                  json_default=_plain)
-
-
-def _plain(v):
-    if isinstance(v, np.generic):
-        return v.item()
-    if isinstance(v, np.ndarray):
-        return v.tolist()
-    raise TypeError(f"{type(v).__name__} is not JSON serialisable")
+    write_guarded(path, STRATEGIES_FORMAT, STRATEGIES_VERSION, arrays, meta)
 
 
 def _schema(meta: dict) -> dict:
