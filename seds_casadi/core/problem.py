@@ -177,8 +177,8 @@ COVARIANCE_FLOOR = 1e-10
 #: every dimension (7-D joint-space putts: data variances 2e-5 .. 2), EM's components collapse
 #: and their regression matrices start IPOPT in a poor basin: WAM joint space, direction
 #: objective, K = 3: e_dot 0.66 with 1e-6, 0.06 with 1e-2 (K = 2, 5: 0.08 / 0.09 -> 0.07 / 0.06).
-#: 2-D and 3-D keep 1e-6, with which every measurement in benchmarks/README.md was made.
-INIT_REG_COVAR = {2: 1e-6, 3: 1e-6}
+#: Up to 3-D it stays 1e-6, with which every measurement in benchmarks/README.md was made.
+INIT_REG_COVAR = 1e-6
 INIT_REG_COVAR_HIGH_D = 1e-2
 
 
@@ -215,7 +215,7 @@ def _initial_theta(
     P0 = np.eye(d) if P0 is None else np.asarray(P0, dtype=float)
     gm = GaussianMixture(
         n_components=K, covariance_type="full", init_params="kmeans",
-        reg_covar=INIT_REG_COVAR.get(d, 1e-6 if d < 2 else INIT_REG_COVAR_HIGH_D),
+        reg_covar=INIT_REG_COVAR if d <= 3 else INIT_REG_COVAR_HIGH_D,
         random_state=sklearn_random_state(random_state), max_iter=200,
     ).fit(np.hstack([X, Xd]))
     theta = np.zeros(layout.size)

@@ -286,8 +286,8 @@ class StableDS(CachedFunctionMixin):
             raise ValueError(f"dt must be positive, got {dt}")
         if method not in ("rk4", "euler"):
             raise ValueError(f"unknown method {method!r}; valid: rk4, euler")
-        rate = self.stiffness()
-        if warn and dt * rate >= _STABLE_STEP[method]:
+        rate = self.stiffness() if warn else 0.0
+        if dt * rate >= _STABLE_STEP[method]:
             warnings.warn(
                 f"{method} at dt = {dt:g} s cannot follow this model's stiffest component (rate "
                 f"{rate:.3g}/s; stable only for dt < {_STABLE_STEP[method] / rate:.3g} s): "
@@ -386,8 +386,7 @@ class StableDS(CachedFunctionMixin):
         if self._lyapunov is not None:
             arrays["lyapunov"] = self._lyapunov
             version = VERSION_LYAPUNOV
-        write_guarded(path, FORMAT, version, arrays, self.fit_info, meta_key="fit_info",
-                      json_default=_json_default)
+        write_guarded(path, FORMAT, version, arrays, self.fit_info, meta_key="fit_info")
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> StableDS:
@@ -428,10 +427,3 @@ def _peek_version(path) -> int | None:
     except Exception:  # noqa: BLE001 - read_guarded says what is wrong with the file
         return None
 
-
-def _json_default(o):
-    if isinstance(o, np.generic):
-        return o.item()
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    raise TypeError(f"not JSON serialisable: {type(o)}")

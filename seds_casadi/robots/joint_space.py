@@ -43,7 +43,8 @@ def joint_space_demos(robot: Robot, demos: Demonstrations, ball=(0.0, 0.0, 0.0),
     Returns
     -------
     Demonstrations
-        Joint trajectories (rad), target q*, same time step.
+        Joint trajectories (rad), target q* (the IK at the demonstrations' target), same
+        time step.
 
     Raises
     ------
@@ -64,7 +65,4 @@ def joint_space_demos(robot: Robot, demos: Demonstrations, ball=(0.0, 0.0, 0.0),
                 raise ValueError(f"demonstration {n}, sample {i}: {exc}") from None
             qs[i] = q
         out.append(qs)
-    ends = np.array([qs[-1] for qs in out])
-    # the last sample of every demonstration is the ball: q* up to the IK tolerance
-    return Demonstrations(out, dt=dt, target=q_star if np.allclose(ends, q_star, atol=1e-3)
-                          else ends.mean(0))
+    return Demonstrations(out, dt=dt, target=q_star)
