@@ -98,7 +98,8 @@ def _add_fit(sub, quiet) -> None:
                    help="Eq. 10 by the parametrization or as NLP constraints [by-construction]")
     f.add_argument("--gain-limit", type=float, default=None,
                    help="bound the stiffness of the components (units of the data's rate; "
-                        "10 is a good start) [none]")
+                        "10 suited the LASA shapes, but it can also hold a fit back: "
+                        "compare with and without) [none]")
     f.add_argument("--out", default="seds_out", help="output folder [seds_out]")
 
 

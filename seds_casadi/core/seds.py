@@ -172,7 +172,8 @@ class SEDS(RegressorMixin, BaseEstimator):
         every |eigenvalue of A_k| stays within about d g times the data's own rate. Without it
         a thin component can reach rates of hundreds per second that explicit integrators at
         the data's step cannot follow (on LASA, forward Euler at 0.01 s diverged from a rate of
-        540/s). None: unbounded, as SEDS (measured in ``benchmarks/README.md``).
+        540/s). None: unbounded, as SEDS (measured in ``benchmarks/README.md``). The value
+        is data-dependent: 10 suited LASA, but a bound can also keep IPOPT from the better fit.
     verbose : bool, default False
         Print IPOPT's iteration log.
     """
