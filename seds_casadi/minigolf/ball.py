@@ -43,7 +43,7 @@ segment so that a fast ball cannot jump over it.
 
 Two engines share exactly these equations: ``"numpy"``, the readable reference here (also
 records paths), and ``"compiled"``, the same step written in CasADi and run in C over many shots
-on two threads (:class:`~seds_casadi.minigolf.ball_kernel.BallKernel`; by default as a vectorised
+on two threads (:class:`~seds_casadi.minigolf.ball_kernel.BallKernel`; by default as a blocked C
 loop generated from the CasADi step, :mod:`seds_casadi.codegen.simd`), 17-20x faster on analytic
 fields. Surfaces whose exact evaluation is expensive ("rough": hundreds of bumps; "heightmap": a
 spline) are read by the compiled engine from a table of derivatives on a 1 cm grid
