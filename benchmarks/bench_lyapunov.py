@@ -33,6 +33,9 @@ VARIANTS = {
     "constrained": {"formulation": "constrained"},
     "constrained-learned": {"formulation": "constrained", "lyapunov": "learned"},
     "constrained-g10": {"formulation": "constrained", "gain_limit": 10.0},
+    "plain-lpv": {"init": "lpv"},
+    "learned-lpv": {"lyapunov": "learned", "init": "lpv"},
+    "learned-g10-lpv": {"lyapunov": "learned", "gain_limit": 10.0, "init": "lpv"},
 }
 NAMED = ("BendedLine", "Leaf_1", "JShape", "WShape")
 

@@ -60,11 +60,12 @@ def test_cli_fit_with_a_learned_lyapunov_matrix_and_a_gain_limit(tmp_path, spira
     out = tmp_path / "out"
     res = subprocess.run(_cli() + ["fit", str(demo_file), "-K", "2", "--objective", "mse",
                                    "--lyapunov", "learned", "--gain-limit", "10",
-                                   "--out", str(out)], capture_output=True, text=True,
+                                   "--init", "lpv", "--out", str(out)], capture_output=True, text=True,
                          timeout=600)
     assert res.returncode == 0, res.stderr
     model = StableDS.load(out / "model.npz")
     assert model.fit_info["lyapunov"] == "learned"
+    assert model.fit_info["init"] == "lpv"
     P = model.lyapunov_matrix
     assert np.trace(P) == pytest.approx(2.0)
     for A in model.A:

@@ -100,6 +100,9 @@ def _add_fit(sub, quiet) -> None:
                    help="bound the stiffness of the components (units of the data's rate; "
                         "10 suited the LASA shapes, but it can also hold a fit back: "
                         "compare with and without) [none]")
+    f.add_argument("--init", choices=("joint-em", "lpv"), default="joint-em",
+                   help="IPOPT's start: EM on [x; xdot] (SEDS) or LPV-DS's (EM on x, "
+                        "least-squares stable gains) [joint-em]")
     f.add_argument("--out", default="seds_out", help="output folder [seds_out]")
 
 
@@ -247,7 +250,7 @@ def _cmd_fit(a) -> int:
     print(f"loaded {demos}")
     model = SEDS(a.components, objective=a.objective, random_state=a.seed,
                  max_iter=a.max_iter, lyapunov=a.lyapunov, formulation=a.formulation,
-                 gain_limit=a.gain_limit).fit(demos).model_
+                 gain_limit=a.gain_limit, init=a.init).fit(demos).model_
     os.makedirs(a.out, exist_ok=True)
     path = os.path.join(a.out, "model.npz")
     model.save(path)

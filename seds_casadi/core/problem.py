@@ -198,9 +198,60 @@ def _speed_factor(A, h, X, Xd, how: str = "median") -> float:
     return c if np.isfinite(c) and c > 0 else 1.0
 
 
+#: initialisations of the learner (see :func:`_initial_theta`)
+INITS = ("joint-em", "lpv")
+
+
+def _stable_gains_lpv(gamma: np.ndarray, X: np.ndarray, Xd: np.ndarray, P0: np.ndarray,
+                      margin: float, A_start: list) -> list:
+    """The A_k of least velocity error with the mixing ``gamma`` (n, K) fixed and
+    A_k^T P0 + P0 A_k <= -2 m I by construction (LPV-DS's second step, Figueroa and
+    Billard 2018, solved here by IPOPT in the learner's own parametrization).
+
+    The error sum_i |sum_k gamma_ik A_k x_i - xdot_i|^2 is a quadratic form in [A_1 .. A_K]
+    with the (K d)-square Gram matrix of the features gamma_ik x_i, so the problem's size does
+    not grow with the number of samples.
+    """
+    n, K = gamma.shape
+    d = X.shape[1]
+    Phi = (gamma[:, :, None] * X[:, None, :]).reshape(n, K * d)
+    G, C = Phi.T @ Phi / n, Phi.T @ Xd / n
+    tril = [(i, j) for i in range(d) for j in range(i + 1)]
+    strict = [(i, j) for i in range(d) for j in range(i)]
+    Pinv = np.linalg.inv(P0)
+    z, A_all, z0 = [], [], []
+    for k in range(K):
+        b = ca.SX.sym(f"b{k}", len(tril))
+        w = ca.SX.sym(f"w{k}", len(strict))
+        B, W = ca.SX.zeros(d, d), ca.SX.zeros(d, d)
+        for idx, (i, j) in enumerate(tril):
+            B[i, j] = b[idx]
+        for idx, (i, j) in enumerate(strict):
+            W[i, j] = w[idx]
+        S = -(B @ B.T + margin * ca.DM.eye(d)) + (W - W.T)
+        A_all.append(ca.DM(Pinv) @ S)
+        z += [b, w]
+        PA = P0 @ A_start[k]
+        sym = 0.5 * (PA + PA.T)
+        BB = -sym - margin * np.eye(d)
+        Lb = np.linalg.cholesky(0.5 * (BB + BB.T))
+        z0 += [Lb[i, j] for i, j in tril] + [0.5 * (PA - PA.T)[i, j] for i, j in strict]
+    M = ca.horzcat(*A_all)  # d x K d: F_i = M Phi_i
+    f = ca.trace(M @ ca.DM(G) @ M.T) - 2 * ca.trace(M @ ca.DM(C))
+    nlp = {"x": ca.vertcat(*z), "f": f}
+    solver = ca.nlpsol("lpv_gains", "ipopt", nlp, {"ipopt.print_level": 0, "print_time": False,
+                                                   "ipopt.sb": "yes", "ipopt.max_iter": 300})
+    sol = solver(x0=np.array(z0))
+    fA = ca.Function("A", [ca.vertcat(*z)], A_all)
+    out = [np.asarray(a) for a in fA(sol["x"])] if K > 1 else [np.asarray(fA(sol["x"]))]
+    if not all(np.all(np.isfinite(a)) for a in out):
+        return A_start
+    return out
+
+
 def _initial_theta(
     layout: Layout, X: np.ndarray, Xd: np.ndarray, margin: float, random_state,
-    P0: np.ndarray | None = None,
+    P0: np.ndarray | None = None, init: str = "joint-em",
 ) -> np.ndarray:
     """k-means + EM on the joint (x, xdot) data, then projected onto the stable set.
 
@@ -208,6 +259,11 @@ def _initial_theta(
     unless a Lyapunov matrix is learned), which is split into symmetric and skew parts; the
     symmetric part's eigenvalues are clipped to at most -max(5 % of its largest magnitude, 2 m),
     which gives the nearest stable S_k in that sense, and A_k = P0^-1 S_k.
+
+    With ``init="lpv"``, as LPV-DS: EM on the positions alone gives the priors, means and
+    covariances (so the mixing is that GMM's posterior), and the A_k are those of least
+    velocity error under that mixing, stable for P0 (:func:`_stable_gains_lpv`, started from the
+    projected GMR gains).
     """
     from sklearn.mixture import GaussianMixture
 
@@ -218,6 +274,8 @@ def _initial_theta(
         reg_covar=INIT_REG_COVAR if d <= 3 else INIT_REG_COVAR_HIGH_D,
         random_state=sklearn_random_state(random_state), max_iter=200,
     ).fit(np.hstack([X, Xd]))
+    if init == "lpv":
+        return _initial_theta_lpv(layout, X, Xd, margin, random_state, P0, gm)
     theta = np.zeros(layout.size)
     constrained = layout.formulation == "constrained"
     if not constrained:
@@ -256,12 +314,65 @@ def _initial_theta(
     return theta
 
 
+def _initial_theta_lpv(layout: Layout, X: np.ndarray, Xd: np.ndarray, margin: float,
+                       random_state, P0: np.ndarray, gm_joint) -> np.ndarray:
+    """``init="lpv"`` of :func:`_initial_theta`: EM on the positions, LPV-DS's gains."""
+    from sklearn.mixture import GaussianMixture
+
+    K, d = layout.K, layout.d
+    gx = GaussianMixture(
+        n_components=K, covariance_type="full", init_params="kmeans",
+        reg_covar=INIT_REG_COVAR if d <= 3 else INIT_REG_COVAR_HIGH_D,
+        random_state=sklearn_random_state(random_state), max_iter=200,
+    ).fit(X)
+    gamma = gx.predict_proba(X)
+    start = []
+    for k in range(K):  # the projected GMR gains of the joint EM, nearest component by mean
+        j = int(np.argmin(np.sum((gm_joint.means_[:, :d] - gx.means_[k]) ** 2, axis=1)))
+        S = gm_joint.covariances_[j]
+        A = np.linalg.solve(S[:d, :d] + 1e-6 * np.eye(d), S[:d, d:]).T
+        PA = P0 @ A
+        ev, V = np.linalg.eigh(0.5 * (PA + PA.T))
+        ev = np.minimum(ev, -max(0.05 * np.max(np.abs(ev)), 2.0 * margin, 1e-3))
+        start.append(np.linalg.solve(P0, V @ np.diag(ev) @ V.T + 0.5 * (PA - PA.T)))
+    gains = _stable_gains_lpv(gamma, X, Xd, P0, margin, start)
+    theta = np.zeros(layout.size)
+    constrained = layout.formulation == "constrained"
+    if not constrained:
+        logits = np.log(np.maximum(gx.weights_, 1e-12))
+        theta[: layout.n_logits] = logits[:-1] - logits[-1]
+    if layout.lyapunov == "learned":
+        theta[layout.lyapunov_slice] = layout.pack_tril(np.linalg.cholesky(P0))
+    for k in range(K):
+        s, A = layout.slices(k), gains[k]
+        mu = gx.means_[k]
+        theta[s["mu"]] = mu
+        theta[s["L"]] = layout.pack_tril(np.linalg.cholesky(gx.covariances_[k]
+                                                            + 1e-6 * np.eye(d)))
+        PA = P0 @ A
+        if constrained:
+            theta[s["pi"]] = max(gx.weights_[k], 1e-6)
+            theta[s["mud"]] = A @ mu
+            theta[s["A"]] = A.ravel()
+        else:
+            ev, V = np.linalg.eigh(-0.5 * (PA + PA.T) - margin * np.eye(d))  # = B B^T >= 0
+            BB = V @ np.diag(np.maximum(ev, 1e-10)) @ V.T
+            theta[s["B"]] = layout.pack_tril(np.linalg.cholesky(0.5 * (BB + BB.T)))
+            theta[s["W"]] = [0.5 * (PA - PA.T)[i, j] for i, j in layout.strict]
+        if layout.with_noise:
+            r = Xd - X @ A.T
+            wk = gamma[:, k]
+            Q = (r * (wk / max(wk.sum(), 1e-300))[:, None]).T @ r + 1e-4 * np.eye(d)
+            theta[s["Q"]] = layout.pack_tril(np.linalg.cholesky(Q))
+    return theta
+
+
 def build_problem(demos: Demonstrations, n_components: int, objective: str,
                   omega_lower: float = 1.0, omega_upper: float = 2.0,
                   stability_margin: float = 1e-3, random_state=None,
                   compile: bool = True, hessian: str = "auto", lyapunov: str = "identity",
                   formulation: str = "by-construction",
-                  gain_limit: float | None = None) -> SEDSProblem:
+                  gain_limit: float | None = None, init: str = "joint-em") -> SEDSProblem:
     """Scale the data, initialise by k-means + EM and build the CasADi problem.
 
     Parameters are those of :class:`~seds_casadi.core.seds.SEDS` (already validated). With
@@ -295,7 +406,7 @@ def build_problem(demos: Demonstrations, n_components: int, objective: str,
     else:
         w = np.ones(len(X))
     P0 = estimate_lyapunov(Xs, Xds) if lyapunov == "learned" else None
-    theta0 = _initial_theta(layout, Xs, Xds, stability_margin, random_state, P0)
+    theta0 = _initial_theta(layout, Xs, Xds, stability_margin, random_state, P0, init)
     lbx, ubx = _bounds(layout, gain_limit)
     theta0 = np.clip(theta0, lbx + 1e-9, ubx - 1e-9)
     if objective == "direction":  # Eq. 9: w_i cos = (w_i / |xdot_i|) xdot_i . f / |f|

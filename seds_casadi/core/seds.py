@@ -27,6 +27,7 @@ from .objectives import approach_constraints
 from .parametrization import FORMULATIONS, LYAPUNOV, OBJECTIVES, stability_constraints
 from .problem import (
     HESSIANS,
+    INITS,
     SPEED_CALIBRATIONS,
     SEDSProblem,
     build_problem,
@@ -174,6 +175,14 @@ class SEDS(RegressorMixin, BaseEstimator):
         the data's step cannot follow (on LASA, forward Euler at 0.01 s diverged from a rate of
         540/s). None: unbounded, as SEDS (measured in ``benchmarks/README.md``). The value
         is data-dependent: 10 suited LASA, but a bound can also keep IPOPT from the better fit.
+    init : {"joint-em", "lpv"}, default "joint-em"
+        IPOPT's starting point. ``"joint-em"`` (SEDS's): k-means + EM on [x; xdot], each
+        component's regression gain projected onto the stable set. ``"lpv"`` (LPV-DS's, Figueroa
+        and Billard 2018, first two steps): EM on the positions alone, then the gains of least
+        velocity error under that GMM's mixing, stable for the initial P (a small IPOPT problem
+        whose size does not depend on the number of samples); the joint problem then improves on
+        it. The problem is non-convex, so the start decides which optimum is reached; which one
+        is better depends on the data (compared on LASA in ``benchmarks/README.md``).
     verbose : bool, default False
         Print IPOPT's iteration log.
     """
@@ -199,6 +208,7 @@ class SEDS(RegressorMixin, BaseEstimator):
         constraints=None,
         speed_calibration: str = "median",
         gain_limit: float | None = None,
+        init: str = "joint-em",
         verbose: bool = False,
     ) -> None:
         # scikit-learn convention: store the parameters as given; fit() validates them
@@ -221,6 +231,7 @@ class SEDS(RegressorMixin, BaseEstimator):
         self.constraints = constraints
         self.speed_calibration = speed_calibration
         self.gain_limit = gain_limit
+        self.init = init
         self.verbose = verbose
 
     def _validated(self) -> dict:
@@ -234,6 +245,8 @@ class SEDS(RegressorMixin, BaseEstimator):
             raise ValueError(f"n_components must be at least 1, got {K}")
         if self.objective not in OBJECTIVES:
             raise ValueError(f"unknown objective {self.objective!r}; valid: {', '.join(OBJECTIVES)}")
+        if self.init not in INITS:
+            raise ValueError(f"unknown init {self.init!r}; valid: {', '.join(INITS)}")
         if self.lyapunov not in LYAPUNOV:
             raise ValueError(f"unknown lyapunov {self.lyapunov!r}; valid: {', '.join(LYAPUNOV)}")
         if self.formulation not in FORMULATIONS:
@@ -290,7 +303,7 @@ class SEDS(RegressorMixin, BaseEstimator):
         return build_problem(demos, K, self.objective, self.omega_lower,
                              self.omega_upper, self.stability_margin, self.random_state,
                              self.compile, self.hessian, self.lyapunov, self.formulation,
-                             self.gain_limit)
+                             self.gain_limit, self.init)
 
     def fit(self, X, y=None, target=None) -> SEDS:
         """Learn a certified globally stable DS from demonstrations.
@@ -464,6 +477,7 @@ class SEDS(RegressorMixin, BaseEstimator):
         info = {
             "status": status, "success": converged,
             "lyapunov": prob.layout.lyapunov, "formulation": prob.layout.formulation,
+            "init": self.init,
             "constraint_violation": viol,
             "iterations": int(stats.get("iter_count", -1)), "objective": J,
             "objective_initial": prob.kernels.value(prob.theta0),
