@@ -116,3 +116,35 @@ def test_problem_objective_matches_numpy_at_the_initial_guess(spiral_demos):
     ref = objective_numpy(prob.theta0, prob.layout, prob.X, prob.Xd, prob.weights, "mse",
                           prob.margin)
     assert float(prob.objective_function(prob.theta0)) == pytest.approx(ref, rel=1e-10)
+
+
+@pytest.mark.parametrize("objective", OBJECTIVES)
+@pytest.mark.parametrize("threads", [2, 3])
+def test_threaded_sums_equal_the_serial_ones_and_the_oracle(objective, threads, monkeypatch):
+    # 101 samples: padded with zero-weight copies to a multiple of the threads
+    layout = Layout(2, 2, with_noise=objective == "likelihood")
+    X, Xd, w = _data(5, n=101)
+    w_used = w if objective == "direction" else np.ones(len(X))
+    monkeypatch.setenv("SEDS_CASADI_THREADS", "1")
+    serial = _kernels(layout, objective, X, Xd, w)
+    monkeypatch.setenv("SEDS_CASADI_THREADS", str(threads))
+    threaded = _kernels(layout, objective, X, Xd, w)
+    assert (serial.threads, threaded.threads) == (1, threads)
+    theta = 0.4 * np.random.default_rng(3).standard_normal(layout.size)
+    ref = objective_numpy(theta, layout, X, Xd, w_used, objective, MARGIN)
+    assert threaded.value(theta) == pytest.approx(ref, rel=1e-10, abs=1e-12)
+    np.testing.assert_allclose(threaded.gradient(theta), serial.gradient(theta), rtol=1e-10,
+                               atol=1e-12)
+    np.testing.assert_allclose(threaded.hessian(theta), serial.hessian(theta), rtol=1e-10,
+                               atol=1e-12)
+
+
+def test_threads_default_and_a_bad_setting(monkeypatch):
+    from seds_casadi.core.objectives import THREADED_MIN_SAMPLES, kernel_threads
+
+    monkeypatch.delenv("SEDS_CASADI_THREADS", raising=False)
+    assert kernel_threads(THREADED_MIN_SAMPLES - 1) == 1
+    assert 1 <= kernel_threads(10_000) <= 2
+    monkeypatch.setenv("SEDS_CASADI_THREADS", "two")
+    with pytest.raises(ValueError, match="SEDS_CASADI_THREADS must be a positive integer"):
+        kernel_threads(10_000)

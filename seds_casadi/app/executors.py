@@ -94,8 +94,11 @@ class _Pool(ProcessPoolExecutor):
 
 
 def _worker_start(parent: int) -> None:
-    """In each worker process: leave Ctrl-C to the parent (which stops the workers), and exit
-    when the parent is gone (killed by SIGKILL, say) instead of living on as an orphan."""
+    """In each worker process: leave Ctrl-C to the parent (which stops the workers), exit
+    when the parent is gone (killed by SIGKILL, say) instead of living on as an orphan, and sum
+    SEDS's objective on one thread (the workers already share the cores) unless the user set
+    ``SEDS_CASADI_THREADS``."""
+    os.environ.setdefault("SEDS_CASADI_THREADS", "1")
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
 

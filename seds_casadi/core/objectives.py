@@ -15,6 +15,8 @@ the same functions run in CasADi's virtual machine.
 
 from __future__ import annotations
 
+import os
+
 import casadi as ca
 import numpy as np
 
@@ -115,6 +117,34 @@ def approach_constraints(layout: Layout, margin: float, direction: np.ndarray,
     return ca.Function("approach", [theta], [ca.vertcat(eq, *minors)])
 
 
+#: samples below which the sums over samples run on one thread (threads cost more than they
+#: save on small data sets)
+THREADED_MIN_SAMPLES = 400
+
+
+def kernel_threads(n_samples: int) -> int:
+    """Threads for the sums over samples: the environment variable ``SEDS_CASADI_THREADS`` if
+    set, else 2 on a machine with at least two cores (1 below :data:`THREADED_MIN_SAMPLES`)."""
+    env = os.environ.get("SEDS_CASADI_THREADS")
+    if env is not None:
+        try:
+            return max(1, int(env))
+        except ValueError:
+            raise ValueError(f"SEDS_CASADI_THREADS must be a positive integer, got {env!r}") from None
+    if n_samples < THREADED_MIN_SAMPLES:
+        return 1
+    return min(2, os.cpu_count() or 1)
+
+
+def _sum_map(f: ca.Function, name: str, n: int, reduce_out: list, threads: int) -> ca.Function:
+    """f summed over n samples (the columns of its data inputs), in ``threads`` contiguous
+    chunks of n / threads samples on as many threads (n must be a multiple of ``threads``)."""
+    if threads <= 1:
+        return f.map(name, "serial", n, [0], reduce_out)
+    inner = f.map(name + "_chunk", "serial", n // threads, [0], reduce_out)
+    return inner.map(name, "thread", threads, [0], reduce_out, {"max_num_threads": threads})
+
+
 class SumKernels:
     """J, grad J and Hess J over a data set, from per-sample kernels mapped with a sum.
 
@@ -133,11 +163,13 @@ class SumKernels:
         Compile the kernels to C when a compiler is available.
     hessian : bool
         Build the exact per-sample Hessian kernel (not needed with IPOPT's L-BFGS).
+    threads : int, optional
+        Threads for the sums over samples (default :func:`kernel_threads`).
     """
 
     def __init__(self, layout: Layout, objective: str, margin: float, X: np.ndarray,
                  Xd: np.ndarray, coef: np.ndarray, norm: float, compile: bool = True,
-                 hessian: bool = True) -> None:
+                 hessian: bool = True, threads: int | None = None) -> None:
         g = sample_objective(layout, objective, margin)
         th, x, xd, c = g.sx_in()
         gv = g(th, x, xd, c)
@@ -153,10 +185,19 @@ class SumKernels:
             self.compiled = compiled[0] is not g
             funcs = compiled
         n = X.shape[0]
-        self._g = funcs[0].map("J_sum", "serial", n, [0], [0])
-        self._fg = funcs[1].map("JG_sum", "serial", n, [0], [0, 1])
-        self._h = funcs[2].map("H_sum", "serial", n, [0], [0]) if hessian else None
-        self._data = [ca.DM(X.T), ca.DM(Xd.T), ca.DM(np.asarray(coef, dtype=float)).T]
+        threads = kernel_threads(n) if threads is None else max(1, int(threads))
+        self.threads = threads
+        # the samples padded to a multiple of the threads with zero-weight copies of the last
+        coef = np.asarray(coef, dtype=float)
+        pad = -n % threads
+        if pad:
+            X = np.vstack([X, np.repeat(X[-1:], pad, 0)])
+            Xd = np.vstack([Xd, np.repeat(Xd[-1:], pad, 0)])
+            coef = np.r_[coef, np.zeros(pad)]
+        self._g = _sum_map(funcs[0], "J_sum", n + pad, [0], threads)
+        self._fg = _sum_map(funcs[1], "JG_sum", n + pad, [0, 1], threads)
+        self._h = _sum_map(funcs[2], "H_sum", n + pad, [0], threads) if hessian else None
+        self._data = [ca.DM(X.T), ca.DM(Xd.T), ca.DM(coef).T]
         self.norm = float(norm)
         self.size = layout.size
         self.n_samples = n

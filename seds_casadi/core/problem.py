@@ -418,8 +418,12 @@ def build_problem(demos: Demonstrations, n_components: int, objective: str,
         coef = np.ones(len(Xs))
         norm = float(len(Xs))
     strategy = hessian_strategy(hessian, layout.size)
+    # the constrained form stays on one thread: its IPOPT path is sensitive to the order of
+    # the sums (a 2-D test problem converged serially and ended 1.8e-6 infeasible at the
+    # iteration limit with two threads); the by-construction form is stable at every iterate
+    threads = 1 if formulation == "constrained" else None
     kernels = SumKernels(layout, objective, stability_margin, Xs, Xds, coef, norm,
-                         compile=compile, hessian=strategy == "exact")
+                         compile=compile, hessian=strategy == "exact", threads=threads)
     return SEDSProblem(
         layout=layout, objective=objective, X=Xs, Xd=Xds, weights=w,
         position_scale=sx, velocity_scale=sv, target=demos.target.copy(), theta0=theta0,
