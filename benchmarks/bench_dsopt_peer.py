@@ -33,10 +33,9 @@ import warnings
 import numpy as np
 
 from seds_casadi import SEDS
-from seds_casadi.app.lasa import dsopt_sets
+from seds_casadi.app.lasa import dsopt_scores, dsopt_sets
 from seds_casadi.core.datasets import LASA_SINGLE_SHAPES
 from seds_casadi.core.errors import ConvergenceWarning
-from seds_casadi.core.metrics import pointwise_direction_error, reproduction_dtw, velocity_rmse
 
 
 def _peer_class(path: str):
@@ -51,15 +50,6 @@ def _peer_class(path: str):
     from dsopt_class import dsopt_class
 
     return dsopt_class
-
-
-def _scores(predict, data) -> tuple[float, float, float]:
-    X, V = np.concatenate(data.positions), np.concatenate(data.velocities)
-    F = predict(X)
-    dtw = reproduction_dtw(predict, data.starts, data.positions, dt=0.01, speed_tol=0.1,
-                           max_steps=3000, window=4)
-    return (velocity_rmse(F, V), float(np.mean(pointwise_direction_error(F, V, 0.0))),
-            float(np.mean(dtw)))
 
 
 def _fit_peer(dsopt_class, train, K: int, seed: int):
@@ -116,7 +106,7 @@ def main(argv: list[str] | None = None) -> int:
         sets = dsopt_sets(shape)
         f_o, t_o, c_o = _fit_ours(sets["train"], a.K, a.seed)
         f_p, t_p, c_p = _fit_peer(dsopt_class, sets["train"], a.K, a.seed)
-        s_o, s_p = _scores(f_o, sets["test"]), _scores(f_p, sets["test"])
+        s_o, s_p = dsopt_scores(f_o, sets["test"])[:3], dsopt_scores(f_p, sets["test"])[:3]
         rows.append((shape, s_o, t_o, c_o, s_p, t_p, c_p))
         print(f"{shape:<17} {s_o[0]:8.2f} {s_o[1]:7.3f} {s_o[2]:10.0f} {t_o:6.2f} {c_o!s:>4} | "
               f"{s_p[0]:8.2f} {s_p[1]:7.3f} {s_p[2]:10.0f} {t_p:6.2f} {c_p!s:>4} | "

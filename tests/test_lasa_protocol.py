@@ -15,6 +15,7 @@ from seds_casadi.app.lasa import (
     DsOptResult,
     choose_k_by_bic,
     dsopt_elbow_k,
+    dsopt_scores,
     dsopt_sets,
     dsopt_table,
     evaluate_shape,
@@ -141,6 +142,31 @@ def test_the_protocol_takes_demos_1_to_4_and_5_to_7_every_second_sample():
     np.testing.assert_array_equal(np.concatenate(demos.shifted_positions),
                                   np.concatenate(train.positions))
     assert sorted(PUBLISHED_SEDS) == sorted(LASA_SINGLE_SHAPES)
+
+
+def test_dsopt_scores_of_a_linear_system_and_of_a_field_twice_as_fast():
+    # demos of xdot = A x sampled exactly: the true field scores RMSE 0 and e_dot 0, and its
+    # Euler reproductions stay near the demos; twice the field keeps the directions (e_dot 0)
+    # and its RMSE is the mean over points of the root of the mean over dims of v^2
+    from scipy.linalg import expm
+
+    from seds_casadi.app.lasa import DsOptSet
+
+    A = np.array([[-1.0, 0.5], [-0.5, -1.0]])
+    t = np.arange(500) * 0.01
+    P, V = [], []
+    for x0 in ([100.0, 0.0], [0.0, 80.0]):
+        X = np.array([expm(A * tk) @ x0 for tk in t])
+        P.append(X)
+        V.append(X @ A.T)
+    data = DsOptSet((1, 2), P, V, np.stack([p[19] for p in P]))
+    rmse, e_dot, dtwd, paths = dsopt_scores(lambda Y: Y @ A.T, data)
+    assert rmse == pytest.approx(0.0, abs=1e-9) and e_dot == pytest.approx(0.0, abs=1e-12)
+    assert paths.shape[1:] == (2, 2) and np.isfinite(dtwd) and dtwd > 0
+    rmse2, e_dot2, _, _ = dsopt_scores(lambda Y: 2 * Y @ A.T, data)
+    Vall = np.concatenate(V)
+    assert rmse2 == pytest.approx(np.mean(np.sqrt(np.mean(Vall**2, axis=1))), rel=1e-12)
+    assert e_dot2 == pytest.approx(0.0, abs=1e-12)
 
 
 def test_published_tables_reproduce_the_published_means():

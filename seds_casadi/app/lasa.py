@@ -73,7 +73,8 @@ from ..core.parametrization import OBJECTIVES
 from ..core.seds import SEDS
 
 __all__ = ["LasaResult", "evaluate_shape", "run_lasa", "write_csv", "summary_table", "PROTOCOLS",
-           "DEFAULT_PROTOCOLS", "DsOptResult", "DsOptSet", "dsopt_sets", "evaluate_shape_dsopt",
+           "DEFAULT_PROTOCOLS", "DsOptResult", "DsOptSet", "dsopt_sets", "dsopt_scores",
+           "evaluate_shape_dsopt",
            "choose_k_by_bic", "bic_scores", "dsopt_elbow_k", "write_dsopt_csv", "dsopt_table",
            "PUBLISHED_MEANS", "PUBLISHED_SEDS", "DSOPT_COLUMNS", "BIC_RULES"]
 
@@ -279,6 +280,26 @@ def _resolve_k(shape: str, n_components, train: DsOptSet, k_max: int, random_sta
     return int(n_components), "given", 0.0
 
 
+def dsopt_scores(predict, data: DsOptSet) -> tuple[float, float, float, np.ndarray]:
+    """ds-opt's scores of a model on one set: RMSE [mm/s], e_dot and DTWD [mm] (forward Euler
+    at dt = 0.01 from the set's starts until every |xdot| component is below 0.1 for 4 steps or
+    3,000 steps), and the reproductions (steps, demos, d).
+
+    Parameters
+    ----------
+    predict : callable
+        Velocity field, (n, d) positions -> (n, d) velocities (any model, e.g. a peer's).
+    data : DsOptSet
+    """
+    X, V = np.concatenate(data.positions), np.concatenate(data.velocities)
+    F = predict(X)
+    dtw, paths = reproduction_dtw(predict, data.starts, data.positions, return_paths=True,
+                                  dt=0.01, speed_tol=0.1, max_steps=3000, window=4)
+    return (velocity_rmse(F, V),
+            float(np.mean(pointwise_direction_error(F, V, min_norm_product=0.0))),
+            float(np.mean(dtw)), paths)
+
+
 def evaluate_shape_dsopt(shape: str, objective: str = "mse", n_components: int | str = "bic",
                          k_max: int = 15, random_state: int = 0, bic_rule: str = "ds-opt",
                          max_iter: int = 1000, figure_path: str | None = None,
@@ -326,17 +347,12 @@ def evaluate_shape_dsopt(shape: str, objective: str = "mse", n_components: int |
     pub = PUBLISHED_SEDS[shape]
     rows, paths = [], {}
     for name, data in sets.items():
-        X, V = np.concatenate(data.positions), np.concatenate(data.velocities)
-        F = model.predict(X)
-        dtw, paths[name] = reproduction_dtw(model.predict, data.starts, data.positions,
-                                            return_paths=True, dt=0.01, speed_tol=0.1,
-                                            max_steps=3000, window=4)
+        rmse, e_dot, dtwd, paths[name] = dsopt_scores(model.predict, data)
         end = float(np.linalg.norm(paths[name][-1] - model.target, axis=1).max())
         off = 1 if name == "train" else 4
         rows.append(DsOptResult(
-            shape, objective, name, velocity_rmse(F, V),
-            float(np.mean(pointwise_direction_error(F, V, min_norm_product=0.0))),
-            float(np.mean(dtw)), seconds, int(model.fit_info["iterations"]), K, certified,
+            shape, objective, name, rmse, e_dot, dtwd, seconds,
+            int(model.fit_info["iterations"]), K, certified,
             str(model.fit_info["status"]), how, k_seconds, len(paths[name]), end, rate,
             float(pub[off]), float(pub[off + 1]), float(pub[off + 2]), int(pub[0]),
             float(model.fit_info["objective"])))

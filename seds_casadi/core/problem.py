@@ -206,7 +206,8 @@ def _stable_gains_lpv(gamma: np.ndarray, X: np.ndarray, Xd: np.ndarray, P0: np.n
                       margin: float, A_start: list) -> list:
     """The A_k of least velocity error with the mixing ``gamma`` (n, K) fixed and
     A_k^T P0 + P0 A_k <= -2 m I by construction (LPV-DS's second step, Figueroa and
-    Billard 2018, solved here by IPOPT in the learner's own parametrization).
+    Billard 2018, solved here by IPOPT with A_k = P0^-1 (-(B_k B_k^T + m I) + W_k - W_k^T), the
+    learner's form of the stable set).
 
     The error sum_i |sum_k gamma_ik A_k x_i - xdot_i|^2 is a quadratic form in [A_1 .. A_K]
     with the (K d)-square Gram matrix of the features gamma_ik x_i, so the problem's size does
@@ -231,11 +232,8 @@ def _stable_gains_lpv(gamma: np.ndarray, X: np.ndarray, Xd: np.ndarray, P0: np.n
         S = -(B @ B.T + margin * ca.DM.eye(d)) + (W - W.T)
         A_all.append(ca.DM(Pinv) @ S)
         z += [b, w]
-        PA = P0 @ A_start[k]
-        sym = 0.5 * (PA + PA.T)
-        BB = -sym - margin * np.eye(d)
-        Lb = np.linalg.cholesky(0.5 * (BB + BB.T))
-        z0 += [Lb[i, j] for i, j in tril] + [0.5 * (PA - PA.T)[i, j] for i, j in strict]
+        Lb, skew = _stable_factors(A_start[k], P0, margin)
+        z0 += [Lb[i, j] for i, j in tril] + [skew[i, j] for i, j in strict]
     M = ca.horzcat(*A_all)  # d x K d: F_i = M Phi_i
     f = ca.trace(M @ ca.DM(G) @ M.T) - 2 * ca.trace(M @ ca.DM(C))
     nlp = {"x": ca.vertcat(*z), "f": f}
@@ -249,122 +247,102 @@ def _stable_gains_lpv(gamma: np.ndarray, X: np.ndarray, Xd: np.ndarray, P0: np.n
     return out
 
 
+def _em(data: np.ndarray, K: int, d: int, random_state):
+    """k-means + EM, full covariances, with the initialisation's ``reg_covar`` for dimension d."""
+    from sklearn.mixture import GaussianMixture
+
+    return GaussianMixture(
+        n_components=K, covariance_type="full", init_params="kmeans",
+        reg_covar=INIT_REG_COVAR if d <= 3 else INIT_REG_COVAR_HIGH_D,
+        random_state=sklearn_random_state(random_state), max_iter=200,
+    ).fit(data)
+
+
+def _project_stable(A: np.ndarray, P0: np.ndarray, margin: float) -> np.ndarray:
+    """The nearest gain to A that is stable for P0: S = P0 A split into symmetric and skew
+    parts, the symmetric part's eigenvalues clipped to at most -max(5 % of its largest
+    magnitude, 2 m), A = P0^-1 S."""
+    PA = P0 @ A
+    ev, V = np.linalg.eigh(0.5 * (PA + PA.T))
+    ev = np.minimum(ev, -max(0.05 * np.max(np.abs(ev)), 2.0 * margin, 1e-3))
+    return np.linalg.solve(P0, V @ np.diag(ev) @ V.T + 0.5 * (PA - PA.T))
+
+
+def _stable_factors(A: np.ndarray, P0: np.ndarray, margin: float):
+    """B (lower triangular) and the skew part K of S = P0 A = -(B B^T + m I) + K, for a gain A
+    stable for P0 (B B^T's eigenvalues floored at 1e-10 against rounding)."""
+    d = len(A)
+    PA = P0 @ A
+    ev, V = np.linalg.eigh(-0.5 * (PA + PA.T) - margin * np.eye(d))
+    BB = V @ np.diag(np.maximum(ev, 1e-10)) @ V.T
+    return np.linalg.cholesky(0.5 * (BB + BB.T)), 0.5 * (PA - PA.T)
+
+
+def _pack_theta(layout: Layout, P0: np.ndarray, margin: float, weights: np.ndarray,
+                means: np.ndarray, covariances: np.ndarray, gains: list, X: np.ndarray,
+                Xd: np.ndarray, resp: np.ndarray | None) -> np.ndarray:
+    """theta of a GMM over the positions (weights, means, Sigma_x) with stable gains A_k, in
+    the layout's form (and the noise covariances of the residuals, weighted by ``resp``)."""
+    d = layout.d
+    theta = np.zeros(layout.size)
+    constrained = layout.formulation == "constrained"
+    if not constrained:
+        logits = np.log(np.maximum(weights, 1e-12))
+        theta[: layout.n_logits] = logits[:-1] - logits[-1]
+    if layout.lyapunov == "learned":
+        theta[layout.lyapunov_slice] = layout.pack_tril(np.linalg.cholesky(P0))
+    for k in range(layout.K):
+        s, A, mu = layout.slices(k), gains[k], means[k]
+        theta[s["mu"]] = mu
+        theta[s["L"]] = layout.pack_tril(np.linalg.cholesky(covariances[k] + 1e-6 * np.eye(d)))
+        if constrained:
+            theta[s["pi"]] = max(weights[k], 1e-6)
+            theta[s["mud"]] = A @ mu
+            theta[s["A"]] = A.ravel()
+        else:
+            B, skew = _stable_factors(A, P0, margin)
+            theta[s["B"]] = layout.pack_tril(B)
+            theta[s["W"]] = [skew[i, j] for i, j in layout.strict]
+        if layout.with_noise:
+            r = Xd - X @ A.T
+            wk = resp[:, k]
+            Q = (r * (wk / max(wk.sum(), 1e-300))[:, None]).T @ r + 1e-4 * np.eye(d)
+            theta[s["Q"]] = layout.pack_tril(np.linalg.cholesky(Q))
+    return theta
+
+
 def _initial_theta(
     layout: Layout, X: np.ndarray, Xd: np.ndarray, margin: float, random_state,
     P0: np.ndarray | None = None, init: str = "joint-em",
 ) -> np.ndarray:
     """k-means + EM on the joint (x, xdot) data, then projected onto the stable set.
 
-    The GMR gain A_k = Sigma_xdotx Sigma_x^-1 of each EM component gives S_k = P0 A_k (P0 = I
-    unless a Lyapunov matrix is learned), which is split into symmetric and skew parts; the
-    symmetric part's eigenvalues are clipped to at most -max(5 % of its largest magnitude, 2 m),
-    which gives the nearest stable S_k in that sense, and A_k = P0^-1 S_k.
+    The GMR gain A_k = Sigma_xdotx Sigma_x^-1 of each EM component is projected onto the gains
+    stable for P0 (P0 = I unless a Lyapunov matrix is learned; :func:`_project_stable`).
 
     With ``init="lpv"``, as LPV-DS: EM on the positions alone gives the priors, means and
     covariances (so the mixing is that GMM's posterior), and the A_k are those of least
     velocity error under that mixing, stable for P0 (:func:`_stable_gains_lpv`, started from the
-    projected GMR gains).
+    projected GMR gains of the joint EM's nearest components).
     """
-    from sklearn.mixture import GaussianMixture
-
     K, d = layout.K, layout.d
     P0 = np.eye(d) if P0 is None else np.asarray(P0, dtype=float)
-    gm = GaussianMixture(
-        n_components=K, covariance_type="full", init_params="kmeans",
-        reg_covar=INIT_REG_COVAR if d <= 3 else INIT_REG_COVAR_HIGH_D,
-        random_state=sklearn_random_state(random_state), max_iter=200,
-    ).fit(np.hstack([X, Xd]))
-    if init == "lpv":
-        return _initial_theta_lpv(layout, X, Xd, margin, random_state, P0, gm)
-    theta = np.zeros(layout.size)
-    constrained = layout.formulation == "constrained"
-    if not constrained:
-        logits = np.log(np.maximum(gm.weights_, 1e-12))
-        theta[: layout.n_logits] = logits[:-1] - logits[-1]
-    if layout.lyapunov == "learned":
-        theta[layout.lyapunov_slice] = layout.pack_tril(np.linalg.cholesky(P0))
-    for k in range(K):
-        s = layout.slices(k)
-        mu = gm.means_[k, :d]
-        S = gm.covariances_[k]
-        Sx = S[:d, :d] + 1e-6 * np.eye(d)
-        theta[s["mu"]] = mu
-        theta[s["L"]] = layout.pack_tril(np.linalg.cholesky(Sx))
-        A = np.linalg.solve(Sx, S[:d, d:]).T  # Sigma_xdotx Sigma_x^-1
-        PA = P0 @ A
-        sym = 0.5 * (PA + PA.T)
-        ev, V = np.linalg.eigh(sym)
-        cap = -max(0.05 * np.max(np.abs(ev)), 2.0 * margin, 1e-3)
-        ev = np.minimum(ev, cap)
-        skew = 0.5 * (PA - PA.T)
-        A_stable = np.linalg.solve(P0, V @ np.diag(ev) @ V.T + skew)
-        if constrained:
-            theta[s["pi"]] = max(gm.weights_[k], 1e-6)
-            theta[s["mud"]] = A_stable @ mu
-            theta[s["A"]] = A_stable.ravel()
-        else:
-            BB = V @ np.diag(-ev - margin) @ V.T  # = B B^T
-            theta[s["B"]] = layout.pack_tril(np.linalg.cholesky(0.5 * (BB + BB.T)))
-            theta[s["W"]] = [skew[i, j] for i, j in layout.strict]
-        if layout.with_noise:
-            r = Xd - X @ A_stable.T
-            wk = gm.predict_proba(np.hstack([X, Xd]))[:, k]
-            Q = (r * (wk / max(wk.sum(), 1e-300))[:, None]).T @ r + 1e-4 * np.eye(d)
-            theta[s["Q"]] = layout.pack_tril(np.linalg.cholesky(Q))
-    return theta
-
-
-def _initial_theta_lpv(layout: Layout, X: np.ndarray, Xd: np.ndarray, margin: float,
-                       random_state, P0: np.ndarray, gm_joint) -> np.ndarray:
-    """``init="lpv"`` of :func:`_initial_theta`: EM on the positions, LPV-DS's gains."""
-    from sklearn.mixture import GaussianMixture
-
-    K, d = layout.K, layout.d
-    gx = GaussianMixture(
-        n_components=K, covariance_type="full", init_params="kmeans",
-        reg_covar=INIT_REG_COVAR if d <= 3 else INIT_REG_COVAR_HIGH_D,
-        random_state=sklearn_random_state(random_state), max_iter=200,
-    ).fit(X)
+    joint = np.hstack([X, Xd])
+    gm = _em(joint, K, d, random_state)
+    Sx = gm.covariances_[:, :d, :d]
+    gmr = [_project_stable(np.linalg.solve(Sx[k] + 1e-6 * np.eye(d),
+                                           gm.covariances_[k, :d, d:]).T, P0, margin)
+           for k in range(K)]  # Sigma_xdotx Sigma_x^-1, projected
+    if init != "lpv":
+        resp = gm.predict_proba(joint) if layout.with_noise else None
+        return _pack_theta(layout, P0, margin, gm.weights_, gm.means_[:, :d], Sx, gmr, X, Xd,
+                           resp)
+    gx = _em(X, K, d, random_state)
     gamma = gx.predict_proba(X)
-    start = []
-    for k in range(K):  # the projected GMR gains of the joint EM, nearest component by mean
-        j = int(np.argmin(np.sum((gm_joint.means_[:, :d] - gx.means_[k]) ** 2, axis=1)))
-        S = gm_joint.covariances_[j]
-        A = np.linalg.solve(S[:d, :d] + 1e-6 * np.eye(d), S[:d, d:]).T
-        PA = P0 @ A
-        ev, V = np.linalg.eigh(0.5 * (PA + PA.T))
-        ev = np.minimum(ev, -max(0.05 * np.max(np.abs(ev)), 2.0 * margin, 1e-3))
-        start.append(np.linalg.solve(P0, V @ np.diag(ev) @ V.T + 0.5 * (PA - PA.T)))
-    gains = _stable_gains_lpv(gamma, X, Xd, P0, margin, start)
-    theta = np.zeros(layout.size)
-    constrained = layout.formulation == "constrained"
-    if not constrained:
-        logits = np.log(np.maximum(gx.weights_, 1e-12))
-        theta[: layout.n_logits] = logits[:-1] - logits[-1]
-    if layout.lyapunov == "learned":
-        theta[layout.lyapunov_slice] = layout.pack_tril(np.linalg.cholesky(P0))
-    for k in range(K):
-        s, A = layout.slices(k), gains[k]
-        mu = gx.means_[k]
-        theta[s["mu"]] = mu
-        theta[s["L"]] = layout.pack_tril(np.linalg.cholesky(gx.covariances_[k]
-                                                            + 1e-6 * np.eye(d)))
-        PA = P0 @ A
-        if constrained:
-            theta[s["pi"]] = max(gx.weights_[k], 1e-6)
-            theta[s["mud"]] = A @ mu
-            theta[s["A"]] = A.ravel()
-        else:
-            ev, V = np.linalg.eigh(-0.5 * (PA + PA.T) - margin * np.eye(d))  # = B B^T >= 0
-            BB = V @ np.diag(np.maximum(ev, 1e-10)) @ V.T
-            theta[s["B"]] = layout.pack_tril(np.linalg.cholesky(0.5 * (BB + BB.T)))
-            theta[s["W"]] = [0.5 * (PA - PA.T)[i, j] for i, j in layout.strict]
-        if layout.with_noise:
-            r = Xd - X @ A.T
-            wk = gamma[:, k]
-            Q = (r * (wk / max(wk.sum(), 1e-300))[:, None]).T @ r + 1e-4 * np.eye(d)
-            theta[s["Q"]] = layout.pack_tril(np.linalg.cholesky(Q))
-    return theta
+    nearest = [int(np.argmin(np.sum((gm.means_[:, :d] - m) ** 2, axis=1))) for m in gx.means_]
+    gains = _stable_gains_lpv(gamma, X, Xd, P0, margin, [gmr[j] for j in nearest])
+    return _pack_theta(layout, P0, margin, gx.weights_, gx.means_, gx.covariances_, gains, X,
+                       Xd, gamma)
 
 
 def build_problem(demos: Demonstrations, n_components: int, objective: str,
