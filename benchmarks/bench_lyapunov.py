@@ -36,6 +36,12 @@ VARIANTS = {
     "plain-lpv": {"init": "lpv"},
     "learned-lpv": {"lyapunov": "learned", "init": "lpv"},
     "learned-g10-lpv": {"lyapunov": "learned", "gain_limit": 10.0, "init": "lpv"},
+    # the direction objective (Eq. 9) with its strength factor (Eq. 12) for the speeds
+    "direction": {"objective": "direction"},
+    "direction-g10": {"objective": "direction", "gain_limit": 10.0},
+    "learned-direction": {"objective": "direction", "lyapunov": "learned"},
+    "learned-g10-direction": {"objective": "direction", "lyapunov": "learned",
+                              "gain_limit": 10.0},
 }
 NAMED = ("BendedLine", "Leaf_1", "JShape", "WShape")
 
@@ -47,8 +53,11 @@ def _one(args):
     warnings.simplefilter("ignore")
     t0 = time.perf_counter()
     try:
-        train, test = evaluate_shape_dsopt(shape, n_components=K, random_state=seed,
-                                           max_iter=max_iter, seds_options=VARIANTS[variant])
+        opts = dict(VARIANTS[variant])
+        objective = opts.pop("objective", "mse")
+        train, test = evaluate_shape_dsopt(shape, objective=objective, n_components=K,
+                                           random_state=seed, max_iter=max_iter,
+                                           seds_options=opts)
     except Exception as exc:  # noqa: BLE001 - a failed fit is a result of the benchmark
         return {"shape": shape, "variant": variant, "error": f"{type(exc).__name__}: {exc}",
                 "seconds": time.perf_counter() - t0}

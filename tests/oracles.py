@@ -217,6 +217,20 @@ def strength_factor(X, priors, means, covariances, log_range):
     return np.exp(saturate(logv, log_range))
 
 
+def strength_model_velocity(X, ds) -> np.ndarray:
+    """f_v(x) = v(x) rho(x) f(x) / ||f(x)|| of a StableDS with a strength factor (rho: the taper
+    ||e|| / sqrt(||e||^2 + r^2)), from its arrays; plain Eq. 5 without one."""
+    F = seds_velocity(X, ds.priors, ds.means, ds.covariances)
+    if ds.strength is None:
+        return F
+    sf = ds.strength
+    v = strength_factor(X, sf.priors, sf.means, sf.covariances, sf.log_range)
+    e = np.linalg.norm(X - ds.target, axis=1)
+    rho = e / np.sqrt(e ** 2 + ds.strength_radius ** 2)
+    nf = np.linalg.norm(F, axis=1)
+    return (v * rho / np.maximum(nf, 1e-200))[:, None] * F
+
+
 def rotation_z(alpha):
     c, s = np.cos(alpha), np.sin(alpha)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])

@@ -160,7 +160,9 @@ def test_dask_against_a_service_that_is_not_a_scheduler(mode):
         with pytest.raises(ValueError, match="--dask .*scheduler"):
             with open_executor(dask=srv.address, timeout=2.0):
                 pass
-        assert time.perf_counter() - t < 6.0  # the timeout holds (was 58 s, or an EiB alloc)
+        # the 2 s timeout holds (it was 58 s, or an EiB alloc); the bound leaves room for a
+        # loaded machine (6.6 s seen after the suite's Dask tests)
+        assert time.perf_counter() - t < 20.0
     finally:
         srv.close()
 

@@ -71,8 +71,9 @@ def test_rollouts_from_far_away_converge_to_the_target(fitted, data):
     d = model.n_dims
     scale = 50 * max(1.0, float(np.abs(model.means[:, :d] - model.target).max()))
     starts = model.target + scale * rng.standard_normal((12, d))
-    # f grows at most linearly, so a step small against 1/||A|| is stable for RK4
-    dt = 0.5 / max(np.linalg.norm(A, 2) for A in model.A)
+    # f grows at most linearly, so a step small against 1/||A|| is stable for RK4 (and against
+    # the taper's rate for a strength model, whose speed far away is bounded)
+    dt = min(0.5 / max(np.linalg.norm(A, 2) for A in model.A), 1.0 / model.stiffness())
     trajs = model.rollout(starts, dt=dt, max_steps=200000, tol=1e-3 * scale)
     for tr in trajs:
         assert np.all(np.isfinite(tr))
@@ -279,16 +280,24 @@ def test_approach_constraint_holds_after_fitting(curved_demos_3d):
 
 def test_predict_is_eq5_of_the_joint_gmm_checked_against_a_numpy_oracle(fitted):
     """StableDS.predict (the CasADi expression, cancellation-free form) equals the general form
-    of Eq. 5 computed in numpy from the joint GMM, far from and close to the target."""
-    from oracles import seds_velocity
+    of Eq. 5 computed in numpy from the joint GMM, far from and close to the target; with a
+    strength factor (the direction objective's default), v(x) rho(x) f(x) / ||f(x)||; and the
+    gains' velocity is Eq. 5 in every case."""
+    from oracles import seds_velocity, strength_model_velocity
 
     for (name, obj), model in fitted.items():
+        assert (model.strength is not None) == (obj == "direction"), (name, obj)
         rng = np.random.default_rng(0)
         X = model.target + rng.standard_normal((50, model.n_dims)) * np.r_[1e-6, 1.0, 10.0][
             rng.integers(0, 3, 50)][:, None]
-        ref = seds_velocity(X, model.priors, model.means, model.covariances)
+        ref = strength_model_velocity(X, model)
         np.testing.assert_allclose(model.predict(X), ref, rtol=1e-6,
                                    atol=1e-9 * np.abs(ref).max(), err_msg=f"{name} {obj}")
+        x = ca.SX.sym("x", model.n_dims)
+        gains = ca.Function("g", [x], [model.gains_velocity_sx(x)])
+        G = np.array([np.asarray(gains(p)).ravel() for p in X])
+        F = seds_velocity(X, model.priors, model.means, model.covariances)
+        np.testing.assert_allclose(G, F, rtol=1e-6, atol=1e-9 * np.abs(F).max())
 
 
 def test_rollout_reports_whether_it_reached_the_target(fitted):

@@ -103,6 +103,11 @@ def _add_fit(sub, quiet) -> None:
     f.add_argument("--init", choices=("joint-em", "lpv"), default="joint-em",
                    help="IPOPT's start: EM on [x; xdot] (SEDS) or LPV-DS's (EM on x, "
                         "least-squares stable gains) [joint-em]")
+    f.add_argument("--speed", choices=("strength", "median", "least-squares"),
+                   default="strength",
+                   help="how a direction-objective model gets the demonstrated speeds: a "
+                        "strength factor v(x) by GMR along the certified streamlines (Eq. 12), "
+                        "or one factor on every gain [strength]")
     f.add_argument("--out", default="seds_out", help="output folder [seds_out]")
 
 
@@ -250,7 +255,8 @@ def _cmd_fit(a) -> int:
     print(f"loaded {demos}")
     model = SEDS(a.components, objective=a.objective, random_state=a.seed,
                  max_iter=a.max_iter, lyapunov=a.lyapunov, formulation=a.formulation,
-                 gain_limit=a.gain_limit, init=a.init).fit(demos).model_
+                 gain_limit=a.gain_limit, init=a.init,
+                 speed_calibration=a.speed).fit(demos).model_
     os.makedirs(a.out, exist_ok=True)
     path = os.path.join(a.out, "model.npz")
     model.save(path)

@@ -169,7 +169,7 @@ class SEDSProblem:
         return p["priors"].copy(), means, covs
 
 
-SPEED_CALIBRATIONS = ("median", "least-squares")
+SPEED_CALIBRATIONS = ("strength", "median", "least-squares")
 #: smallest eigenvalue ratio of a returned Sigma_x (see :meth:`SEDSProblem._model_params`)
 COVARIANCE_FLOOR = 1e-10
 #: variance added to the EM covariances of the initialisation (scaled units: positions and
@@ -184,10 +184,10 @@ INIT_REG_COVAR_HIGH_D = 1e-2
 
 def _speed_factor(A, h, X, Xd, how: str = "median") -> float:
     F = np.einsum("nk,kij,nj->ni", h, A, X)
-    if how == "least-squares":
+    if how == "least-squares":  # "strength" models keep the median-calibrated gains under v(x)
         num, den = float(np.sum(F * Xd)), float(np.sum(F * F))
         return num / den if (num > 0 and den > 0) else 1.0
-    if how != "median":
+    if how not in ("median", "strength"):
         raise ValueError(f"unknown speed calibration {how!r}; valid: "
                          f"{', '.join(SPEED_CALIBRATIONS)}")
     nf, nv = np.linalg.norm(F, axis=1), np.linalg.norm(Xd, axis=1)

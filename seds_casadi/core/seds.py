@@ -34,6 +34,7 @@ from .problem import (
     direction_weights,
 )
 from .stable_ds import StableDS
+from .strength import StrengthFactor
 from .user_constraints import UserConstraints
 
 __all__ = ["SEDS", "SEDSProblem", "direction_weights"]
@@ -42,6 +43,12 @@ _LOG = logging.getLogger(__name__)
 _OK_STATUS = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 #: seconds between two progress lines of a running fit (logging, INFO)
 PROGRESS_SECONDS = 2.0
+#: taper radius r of a strength model (:class:`StableDS`), as a fraction of the data's extent:
+#: the speed falls within about r of the target (the LASA protocols call 1 % "reached")
+STRENGTH_RADIUS = 0.01
+#: samples slower than this times the median speed (the demonstrations' ends) are left out of
+#: the strength factor's GMM: their log speeds would stretch its range towards -inf
+STRENGTH_MIN_SPEED = 0.02
 
 
 class _Progress(ca.Callback):
@@ -162,10 +169,26 @@ class SEDS(RegressorMixin, BaseEstimator):
         :class:`SolverError`). With the direction objective the gains are rescaled after the
         solve (``fit_info["speed_factor"]``), so constraints on the scale of ``A`` need
         ``objective="mse"`` or ``"likelihood"``.
-    speed_calibration : {"median", "least-squares"}, default "median"
+    speed_calibration : {"strength", "median", "least-squares"}, default "strength"
         How a direction-objective model gets the demonstrated speeds (Eq. 9 fixes only
-        directions; :meth:`SEDSProblem.speed_factor`): the median speed ratio along the
-        demonstrations made 1, or the least-squares factor (the former default).
+        directions; ignored by the other objectives, which fit speeds):
+
+        * ``"strength"``: the paper's way (Eq. 3, 8, 12): a strength factor v(x) > 0 learned by
+          GMR of the demonstrated log speeds on the positions (:class:`StrengthFactor`, with
+          ``strength_components`` Gaussians) sets the speed along the certified streamlines;
+          the returned :class:`StableDS` moves at ``v(x)`` in the direction of f, slowing down
+          within 1 % of the data's extent of the target (see :class:`StableDS`). Same
+          streamlines, same certificate. Without it a model's speed can collapse along part of
+          the path (on LASA WShape, Leaf_2 and Angle, reproductions did not arrive within 3x
+          the demonstration's duration; measured in ``benchmarks/README.md``).
+        * ``"median"``: one factor c on every A_k, making the median speed ratio along the
+          demonstrations 1 (:meth:`SEDSProblem.speed_factor`); the model stays a plain GMM DS
+          (Eq. 5).
+        * ``"least-squares"``: the least-squares factor (dominated by the samples where ||f||
+          is largest; the default before the median).
+    strength_components : int or None, default None
+        Gaussians of the strength factor's GMM (``speed_calibration="strength"``); None: the
+        model's own K.
     gain_limit : float or None, default None
         Bound the stiffness of the components: the entries of B_k within +-sqrt(g) and of W_k
         within +-g (A_k = -(B_k B_k^T + m I) + W_k - W_k^T; constrained form: the entries of
@@ -206,7 +229,8 @@ class SEDS(RegressorMixin, BaseEstimator):
         lyapunov: str = "identity",
         formulation: str = "by-construction",
         constraints=None,
-        speed_calibration: str = "median",
+        speed_calibration: str = "strength",
+        strength_components: int | None = None,
         gain_limit: float | None = None,
         init: str = "joint-em",
         verbose: bool = False,
@@ -230,6 +254,7 @@ class SEDS(RegressorMixin, BaseEstimator):
         self.formulation = formulation
         self.constraints = constraints
         self.speed_calibration = speed_calibration
+        self.strength_components = strength_components
         self.gain_limit = gain_limit
         self.init = init
         self.verbose = verbose
@@ -262,6 +287,11 @@ class SEDS(RegressorMixin, BaseEstimator):
         if self.speed_calibration not in SPEED_CALIBRATIONS:
             raise ValueError(f"unknown speed_calibration {self.speed_calibration!r}; valid: "
                              f"{', '.join(SPEED_CALIBRATIONS)}")
+        sk = self.strength_components
+        if sk is not None and (isinstance(sk, bool) or not isinstance(sk, (int, np.integer))
+                               or sk < 1):
+            raise ValueError(f"strength_components must be a positive integer or None, got "
+                             f"{sk!r}")
         if self.hessian not in HESSIANS:
             raise ValueError(f"unknown hessian {self.hessian!r}; valid: {', '.join(HESSIANS)}")
         for name in ("omega_lower", "omega_upper"):
@@ -424,6 +454,9 @@ class SEDS(RegressorMixin, BaseEstimator):
 
     def _solve(self, demos: Demonstrations, params: dict) -> StableDS:
         t0 = time.perf_counter()
+        strength = radius = None  # first: data it cannot use is refused before the long solve
+        if self.objective == "direction" and self.speed_calibration == "strength":
+            strength, radius = self._fit_strength(demos, params["n_components"])
         prob = self.build_problem(demos, params["n_components"])
         theta_sym = ca.MX.sym("theta", prob.layout.size)
         objective = prob.kernels.nlp_objective()  # keep alive while the solver runs
@@ -484,12 +517,15 @@ class SEDS(RegressorMixin, BaseEstimator):
             "objective_name": self.objective, "seconds": time.perf_counter() - t0,
             "seconds_solve": time.perf_counter() - t_built, "n_parameters": prob.layout.size,
             "speed_factor": c, "n_components": params["n_components"],
+            "speed_calibration": (self.speed_calibration if self.objective == "direction"
+                                  else None),
+            "strength_components": None if strength is None else len(strength.priors),
             "n_samples": int(prob.X.shape[0]), "hessian": prob.hessian,
             "compiled_kernels": prob.kernels.compiled, "solver": "ipopt",
         }
         try:
             model = StableDS(priors, means, covs, prob.target, fit_info=info, status=status,
-                             lyapunov=lyap)
+                             lyapunov=lyap, strength=strength, strength_radius=radius)
         except StabilityError as exc:
             if prob.layout.formulation != "constrained":
                 raise
@@ -501,6 +537,28 @@ class SEDS(RegressorMixin, BaseEstimator):
         if user is not None:
             model.fit_info["user_constraint_violation"] = user.check(model, status)
         return model
+
+
+    def _fit_strength(self, demos: Demonstrations, K: int) -> tuple[StrengthFactor, float]:
+        """The strength factor (Eq. 12 in log speed) on the demonstrations' moving samples, and
+        the taper radius: :data:`STRENGTH_RADIUS` times the data's extent."""
+        Xs, Xd, _, _ = demos.stacked()
+        speed = np.linalg.norm(Xd, axis=1)
+        typical = float(np.median(speed[speed > 0])) if np.any(speed > 0) else 0.0
+        moving = speed > STRENGTH_MIN_SPEED * typical
+        n, need = int(np.count_nonzero(moving)), demos.n_dims + 2
+        if n < need:
+            raise ValueError(
+                f"the demonstrations hardly move: {n} samples faster than {STRENGTH_MIN_SPEED:g} "
+                f"x the median speed, and a strength factor (Eq. 12) over {demos.n_dims}-D "
+                f"positions needs at least {need}; check the velocities, or use "
+                "speed_calibration='median'")
+        X = Xs[moving] + demos.target
+        Ksf = max(1, min(int(self.strength_components or K), n // need))
+        sf = StrengthFactor.fit(X, speed[moving], n_components=Ksf,
+                                random_state=self.random_state)
+        extent = float(np.max(np.ptp(Xs, axis=0)))
+        return sf, STRENGTH_RADIUS * max(extent, 1e-12)
 
 
 def _as_demonstrations(X, y, target) -> Demonstrations:

@@ -17,6 +17,12 @@ UTF-8 bytes of fit_info. ``load`` checks all of it and re-certifies stability.
 A model with a learned Lyapunov matrix (issue 14) is written as ``version`` = 2 with the extra
 entry ``lyapunov`` (d, d) after ``target`` (and in the checksum); it is certified against
 A_k^T P + P A_k < 0 on load, so a tampered P is refused. Version 1 files load with P = I.
+
+A model with a strength factor (``SEDS(speed_calibration="strength")``) is written as
+``version`` = 3 (P = I) or 4 (learned P, ``lyapunov`` first) with the extra entries
+``strength_priors`` (K_v,), ``strength_means`` (K_v, d+1), ``strength_covariances``
+(K_v, d+1, d+1), ``strength_log_range`` (2,) and ``strength_radius`` (1,), in that order, in the
+checksum too.
 """
 
 from __future__ import annotations
@@ -31,6 +37,7 @@ from ..codegen import CachedFunctionMixin, batch_evaluate
 from .errors import ConvergenceWarning, ModelFileError, StabilityError
 from .gmm import responsibilities_sx
 from .model_files import read_guarded, write_guarded
+from .strength import StrengthFactor
 
 __all__ = ["StableDS", "certify"]
 
@@ -39,8 +46,17 @@ VERSION = 1
 VERSION_LYAPUNOV = 2
 _SCHEMA = {"priors": 1, "means": 2, "covariances": 3, "target": 1}
 _SCHEMA_LYAPUNOV = {**_SCHEMA, "lyapunov": 2}
+VERSION_STRENGTH = 3
+VERSION_STRENGTH_LYAPUNOV = 4
+_STRENGTH_ENTRIES = {"strength_priors": 1, "strength_means": 2, "strength_covariances": 3,
+                     "strength_log_range": 1, "strength_radius": 1}
+_SCHEMAS = {VERSION: _SCHEMA, VERSION_LYAPUNOV: _SCHEMA_LYAPUNOV,
+            VERSION_STRENGTH: {**_SCHEMA, **_STRENGTH_ENTRIES},
+            VERSION_STRENGTH_LYAPUNOV: {**_SCHEMA_LYAPUNOV, **_STRENGTH_ENTRIES}}
 #: beyond this many times the data's extent, Eq. 6 is evaluated at that distance (velocity_sx)
 FAR_FACTOR = 1e6
+#: below this ||f|| (only at x* in practice) a strength model's velocity is 0
+_TINY = 1e-200
 #: largest stable step of explicit Euler and RK4 for a rate lambda: dt * lambda below these
 _STABLE_STEP = {"euler": 2.0, "rk4": 2.78}
 
@@ -176,6 +192,21 @@ class StableDS(CachedFunctionMixin):
     lyapunov : array, shape (d, d), optional
         The matrix P of V(x) = (x - x*)^T P (x - x*) that certifies the model (a learned one,
         ``SEDS(lyapunov="learned")``); None for SEDS's P = I.
+    strength : StrengthFactor, optional
+        A strength factor v(x) > 0 (Eq. 12, :class:`~seds_casadi.core.strength.StrengthFactor`)
+        over the same positions. The model then moves along the streamlines of the Eq. 5 system
+        at the speed v: ``predict`` returns
+
+            f_v(x) = v(x) rho(x) f(x) / ||f(x)||,   rho(x) = ||x - x*|| / sqrt(||x - x*||^2 + r^2)
+
+        (Eq. 3 with the target field of Eq. 8 and the strength factor of Eq. 12), where rho
+        tapers the speed within about r of the target so that x* is reached smoothly
+        (exponentially, at the rate v(x*) / r) instead of chattering across it. f_v is a
+        positive multiple of f away from x*, so the same streamlines, the same certificate and
+        the same Lyapunov function hold: V decreases along every trajectory of f_v wherever it
+        does along f. ``gains_velocity_sx`` is f itself.
+    strength_radius : float, optional
+        r of the taper (required with ``strength``; in position units, > 0).
 
     Attributes
     ----------
@@ -186,7 +217,8 @@ class StableDS(CachedFunctionMixin):
     """
 
     def __init__(self, priors, means, covariances, target, fit_info=None, status="constructed",
-                 lyapunov=None):
+                 lyapunov=None, strength: StrengthFactor | None = None,
+                 strength_radius: float | None = None):
         self.priors = np.array(priors, dtype=float).ravel()
         self.means = np.array(means, dtype=float)
         self.covariances = np.array(covariances, dtype=float)
@@ -209,6 +241,7 @@ class StableDS(CachedFunctionMixin):
             raise TypeError(f"fit_info must be a dict (the fit's report), got "
                             f"{type(fit_info).__name__}")
         self.fit_info = dict(fit_info or {})
+        self.strength, self.strength_radius = _check_strength(strength, strength_radius, d)
 
     @property
     def lyapunov_matrix(self) -> np.ndarray:
@@ -238,7 +271,8 @@ class StableDS(CachedFunctionMixin):
         return X2, single
 
     def predict(self, X) -> np.ndarray:
-        """Velocity f(x) of Eq. 5 at each point (the expression of :meth:`to_casadi`).
+        """Velocity f(x) of Eq. 5 at each point (the expression of :meth:`to_casadi`; with a
+        strength factor, f_v(x) of the class docstring).
 
         Parameters
         ----------
@@ -334,6 +368,20 @@ class StableDS(CachedFunctionMixin):
         return (paths, info) if return_info else paths
 
     def velocity_sx(self, x) -> ca.SX:
+        """The model's velocity as an SX expression of a symbolic point x (shape (d, 1)).
+
+        Eq. 5 (:meth:`gains_velocity_sx`); with a strength factor, f_v(x) = v(x) rho(x)
+        f(x) / ||f(x)|| (class docstring; 0 at x*).
+        """
+        f = self.gains_velocity_sx(x)
+        if self.strength is None:
+            return f
+        e2 = ca.sumsqr(x - ca.DM(self.target))
+        rho = ca.sqrt(e2 / (e2 + self.strength_radius ** 2))
+        nf = ca.norm_2(f)
+        return (self.strength.sx(x) * rho / ca.fmax(nf, _TINY)) * f
+
+    def gains_velocity_sx(self, x) -> ca.SX:
         """Eq. 5 as an SX expression of a symbolic point x (shape (d, 1)): the one definition.
 
         f(x) = sum_k h^k(x) (mu_xdot^k + A_k (x - mu_x^k)), h^k of Eq. 6. The model is certified,
@@ -367,8 +415,24 @@ class StableDS(CachedFunctionMixin):
 
     def stiffness(self) -> float:
         """The largest |eigenvalue| of any A_k [1/s]: explicit Euler needs dt < 2 / stiffness,
-        RK4 dt < 2.78 / stiffness, to follow the model near that component."""
-        return float(max(np.abs(np.linalg.eigvals(A)).max() for A in self.A))
+        RK4 dt < 2.78 / stiffness, to follow the model near that component.
+
+        With a strength factor: the largest spectral radius of the Jacobian of f_v at points
+        around the target (at r / 2, where the taper's rate v(x*) / r acts) and at the
+        components' means."""
+        if self.strength is None:
+            return float(max(np.abs(np.linalg.eigvals(A)).max() for A in self.A))
+        cached = self.__dict__.get("_stiffness")
+        if cached is None:
+            d = self.n_dims
+            x = ca.SX.sym("x", d)
+            jac = ca.Function("seds_f_jacobian", [x], [ca.jacobian(self.velocity_sx(x), x)])
+            eye = np.eye(d)
+            pts = np.vstack([self.target + 0.5 * self.strength_radius * np.r_[eye, -eye],
+                             self.means[:, :d]])
+            cached = self.__dict__["_stiffness"] = float(max(
+                np.abs(np.linalg.eigvals(np.asarray(jac(p)))).max() for p in pts))
+        return cached
 
     def to_casadi(self, name: str = "seds_f") -> ca.Function:
         """Eq. 5 (:meth:`velocity_sx`) as a CasADi Function x (d,) -> f(x) (d,), for code
@@ -386,6 +450,14 @@ class StableDS(CachedFunctionMixin):
         if self._lyapunov is not None:
             arrays["lyapunov"] = self._lyapunov
             version = VERSION_LYAPUNOV
+        if self.strength is not None:
+            sf = self.strength
+            arrays.update(strength_priors=sf.priors, strength_means=sf.means,
+                          strength_covariances=sf.covariances,
+                          strength_log_range=np.asarray(sf.log_range, dtype=float),
+                          strength_radius=np.array([self.strength_radius]))
+            version = (VERSION_STRENGTH_LYAPUNOV if self._lyapunov is not None
+                       else VERSION_STRENGTH)
         write_guarded(path, FORMAT, version, arrays, self.fit_info, meta_key="fit_info")
 
     @classmethod
@@ -400,13 +472,23 @@ class StableDS(CachedFunctionMixin):
             The stored parameters violate Eq. 10.
         """
         version = _peek_version(path)
-        schema = _SCHEMA_LYAPUNOV if version == VERSION_LYAPUNOV else _SCHEMA
-        arrays, info, _ = read_guarded(path, FORMAT, (VERSION, VERSION_LYAPUNOV), schema,
+        schema = _SCHEMAS.get(version, _SCHEMA)
+        arrays, info, _ = read_guarded(path, FORMAT, tuple(_SCHEMAS), schema,
                                        meta_key="fit_info")
+        strength = radius = None
         try:
+            if "strength_priors" in arrays:
+                log_range = arrays["strength_log_range"]
+                if log_range.shape != (2,) or arrays["strength_radius"].shape != (1,):
+                    raise ValueError("strength_log_range must have 2 entries and "
+                                     "strength_radius 1")
+                strength = StrengthFactor(arrays["strength_priors"], arrays["strength_means"],
+                                          arrays["strength_covariances"], log_range)
+                radius = float(arrays["strength_radius"][0])
             return cls(arrays["priors"], arrays["means"], arrays["covariances"],
                        arrays["target"], fit_info=info, status="loaded",
-                       lyapunov=arrays.get("lyapunov"))
+                       lyapunov=arrays.get("lyapunov"), strength=strength,
+                       strength_radius=radius)
         except StabilityError:
             raise
         except (ValueError, np.linalg.LinAlgError) as exc:
@@ -414,7 +496,38 @@ class StableDS(CachedFunctionMixin):
 
     def __repr__(self) -> str:
         st = self.fit_info.get("status", "-")
-        return f"StableDS(n_components={self.n_components}, n_dims={self.n_dims}, status={st!r})"
+        extra = "" if self.strength is None else ", strength factor"
+        return (f"StableDS(n_components={self.n_components}, n_dims={self.n_dims}, "
+                f"status={st!r}{extra})")
+
+
+def _check_strength(strength, radius, d: int) -> tuple[StrengthFactor | None, float | None]:
+    """The strength factor and its taper radius, checked (ValueError saying what is wrong)."""
+    if strength is None:
+        if radius is not None:
+            raise ValueError("strength_radius is given without a strength factor")
+        return None, None
+    if not isinstance(strength, StrengthFactor):
+        raise TypeError(f"strength must be a StrengthFactor, got {type(strength).__name__}")
+    if strength.n_dims != d:
+        raise ValueError(f"the strength factor is over {strength.n_dims}-D positions, the model "
+                         f"over {d}-D")
+    K = len(strength.priors)
+    if (strength.means.shape != (K, d + 1) or strength.covariances.shape != (K, d + 1, d + 1)
+            or not all(np.all(np.isfinite(a)) for a in
+                       (strength.priors, strength.means, strength.covariances))
+            or np.any(strength.priors <= 0)
+            or any(np.linalg.eigvalsh(0.5 * (S + S.T))[0] <= 0 for S in strength.covariances)):
+        raise ValueError("the strength factor's GMM must have finite arrays of shapes (K,), "
+                         f"(K, {d + 1}), (K, {d + 1}, {d + 1}), positive priors and positive "
+                         "definite covariances")
+    lo, hi = strength.log_range
+    if not (np.isfinite(lo) and np.isfinite(hi) and lo <= hi):
+        raise ValueError(f"the strength factor's log_range must be finite with lo <= hi, got "
+                         f"{strength.log_range} (it keeps v within the demonstrated speeds)")
+    if radius is None or not (np.isfinite(radius) and radius > 0):
+        raise ValueError(f"strength_radius must be positive and finite, got {radius}")
+    return strength, float(radius)
 
 
 def _peek_version(path) -> int | None:

@@ -145,6 +145,9 @@ class HittingMotionLearner(BaseEstimator):
     def _seds_options(self, approach: np.ndarray) -> dict:
         opts = dict(self.seds_params or {})
         opts.setdefault("objective", "direction")
+        # the hitting DS has its own strength factor (Eq. 12, over the approach paths too) and
+        # uses only the directions of f (Eq. 8): a plain GMM DS keeps its kernels lean
+        opts.setdefault("speed_calibration", "median")
         if self.approach_ratio is not None:
             opts.setdefault("approach_direction", approach)
             opts.setdefault("approach_ratio", self.approach_ratio)

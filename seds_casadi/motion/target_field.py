@@ -30,14 +30,17 @@ TINY = 1e-200
 
 
 def certified_velocity_sx(y, ds: StableDS) -> ca.SX:
-    """f(y) = sum_k h^k(y) A_k (y - x*) of a certified model (Eq. 5): :meth:`StableDS.velocity_sx`.
+    """f(y) = sum_k h^k(y) A_k (y - x*) of a certified model (Eq. 5).
+
+    :meth:`StableDS.gains_velocity_sx`: a model's strength factor, if it has one, is left out
+    (it is a positive factor, which Eq. 8 normalises away).
 
     Parameters
     ----------
     y : casadi.SX, shape (d, 1)
     ds : StableDS
     """
-    return ds.velocity_sx(y)
+    return ds.gains_velocity_sx(y)
 
 
 def target_field_sx(y, ds: StableDS, hitting_direction) -> tuple[ca.SX, ca.SX]:
