@@ -266,6 +266,18 @@ def test_run_lasa_runs_ds_opt_beside_the_other_protocols(tmp_path):
     assert summary.index("unconverged") < summary.index("ds-opt protocol")
 
 
+def test_run_lasa_split_protocol_scores_the_held_out_demos():
+    """Each task runs its own protocol: "split" trains on demos 1-4 and scores 5-7 (it once ran
+    "all" under the split label), so its figures are evaluate_shape's split figures."""
+    res = run_lasa(shapes=["Angle"], objectives=["mse"], protocols=["all", "split"],
+                   n_components=2, n_samples=20, figures=False, progress=False)
+    by = {r.protocol: r for r in res}
+    assert sorted(by) == ["all", "split"]
+    split = evaluate_shape("Angle", "mse", "split", n_components=2, n_samples=20)
+    assert by["split"].rmse == pytest.approx(split.rmse, rel=1e-9)
+    assert by["split"].rmse != pytest.approx(by["all"].rmse, rel=1e-6)
+
+
 def test_cli_lasa_protocol_ds_opt_writes_the_csv_with_units(tmp_path):
     out = tmp_path / "dsopt"
     res = subprocess.run([sys.executable, "-m", "seds_casadi", "lasa", "--protocol", "ds-opt",

@@ -434,9 +434,10 @@ def evaluate_shape(shape: str, objective: str = "direction", protocol: str = "al
 
 def _task(args) -> LasaResult | list[DsOptResult]:
     args = dict(args)
-    if args.pop("protocol") == "ds-opt":
+    if args["protocol"] == "ds-opt":
+        args.pop("protocol")
         return evaluate_shape_dsopt(**args)
-    return evaluate_shape(**args)
+    return evaluate_shape(**args)  # "all" or "split": evaluate_shape takes the protocol
 
 
 def run_lasa(shapes=None, objectives=None, protocols=DEFAULT_PROTOCOLS,
