@@ -12,9 +12,11 @@ from .errors import ConvergenceWarning, ModelFileError, SEDSError, SolverError, 
 from .model_selection import bic_n_components
 from .seds import SEDS, SEDSProblem
 from .stable_ds import StableDS, certify
+from .strength import StrengthFactor, StrengthFactorLearner
 
 __all__ = [
     "Demonstrations", "load_demonstrations", "save_demonstrations", "SEDS", "SEDSProblem",
     "StableDS", "certify", "load_lasa", "LASA_SHAPES", "LASA_SINGLE_SHAPES", "SEDSError",
     "SolverError", "StabilityError", "ModelFileError", "ConvergenceWarning", "bic_n_components",
+    "StrengthFactor", "StrengthFactorLearner",
 ]

@@ -538,7 +538,6 @@ class SEDS(RegressorMixin, BaseEstimator):
             model.fit_info["user_constraint_violation"] = user.check(model, status)
         return model
 
-
     def _fit_strength(self, demos: Demonstrations, K: int) -> tuple[StrengthFactor, float]:
         """The strength factor (Eq. 12 in log speed) on the demonstrations' moving samples, and
         the taper radius: :data:`STRENGTH_RADIUS` times the data's extent."""

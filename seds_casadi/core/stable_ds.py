@@ -419,7 +419,10 @@ class StableDS(CachedFunctionMixin):
 
         With a strength factor: the largest spectral radius of the Jacobian of f_v at points
         around the target (at r / 2, where the taper's rate v(x*) / r acts) and at the
-        components' means."""
+        components' means: a sample, not a bound. Where ||f|| is small away from the target
+        the direction f / ||f|| turns quickly (its Jacobian grows as ||grad f|| / ||f||), so a
+        strength model can be stiffer there than this figure; the plain model crawls in the
+        same places."""
         if self.strength is None:
             return float(max(np.abs(np.linalg.eigvals(A)).max() for A in self.A))
         cached = self.__dict__.get("_stiffness")
