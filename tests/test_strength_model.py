@@ -193,3 +193,23 @@ def test_demonstrations_that_hardly_move_get_a_clear_error():
     V[2:] = 0.0  # two samples move, the rest stand still
     with pytest.raises(ValueError, match="hardly move"):
         SEDS(1, random_state=0).fit(X, V)
+
+
+def test_taper_radius_rule(wshape):
+    """r = 1 % of the extent, or the distance covered at v(x*) in two of the data's steps if
+    more (so the taper's rate v(x*)/r stays below half the sampling rate)."""
+    demos, model = wshape
+    Xs, _, _, _ = demos.stacked()
+    extent = float(np.max(np.ptp(Xs, axis=0)))
+    v_star = float(model.strength(model.target))
+    expected = min(max(0.01 * extent, 2.0 * v_star * demos.estimated_dt()), 0.25 * extent)
+    assert model.strength_radius == pytest.approx(expected, rel=1e-12)
+    assert v_star / model.strength_radius <= 0.5 / demos.estimated_dt() * (1 + 1e-12)
+    # samples without time order have no step: 1 % of the extent
+    X = np.concatenate(demos.positions)
+    V = np.concatenate(demos.velocities)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        m = SEDS(2, random_state=0, max_iter=50).fit(X, V, target=demos.target).model_
+    ext = float(np.max(np.ptp(X, axis=0)))
+    assert m.strength_radius == pytest.approx(0.01 * ext, rel=1e-12)

@@ -49,6 +49,10 @@ STRENGTH_RADIUS = 0.01
 #: samples slower than this times the median speed (the demonstrations' ends) are left out of
 #: the strength factor's GMM: their log speeds would stretch its range towards -inf
 STRENGTH_MIN_SPEED = 0.02
+#: ... and at least the distance covered at the speed v(x*) in this many of the data's steps
+STRENGTH_STEPS = 2.0
+#: ... and at most this fraction of the extent
+STRENGTH_RADIUS_MAX = 0.25
 
 
 class _Progress(ca.Callback):
@@ -177,7 +181,8 @@ class SEDS(RegressorMixin, BaseEstimator):
           GMR of the demonstrated log speeds on the positions (:class:`StrengthFactor`, with
           ``strength_components`` Gaussians) sets the speed along the certified streamlines;
           the returned :class:`StableDS` moves at ``v(x)`` in the direction of f, slowing down
-          within 1 % of the data's extent of the target (see :class:`StableDS`). Same
+          near the target (within 1 % of the data's extent, or more for motions that arrive
+          fast: see :meth:`_fit_strength` and :class:`StableDS`). Same
           streamlines, same certificate. Without it a model's speed can collapse along part of
           the path (on LASA WShape, Leaf_2 and Angle, reproductions did not arrive within 3x
           the demonstration's duration; measured in ``benchmarks/README.md``).
@@ -540,7 +545,10 @@ class SEDS(RegressorMixin, BaseEstimator):
 
     def _fit_strength(self, demos: Demonstrations, K: int) -> tuple[StrengthFactor, float]:
         """The strength factor (Eq. 12 in log speed) on the demonstrations' moving samples, and
-        the taper radius: :data:`STRENGTH_RADIUS` times the data's extent."""
+        the taper radius r: :data:`STRENGTH_RADIUS` times the data's extent, or, if more, the
+        distance covered at v(x*) in :data:`STRENGTH_STEPS` of the data's time steps (so that
+        the taper's rate v(x*) / r is at most half the sampling rate), at most
+        :data:`STRENGTH_RADIUS_MAX` times the extent."""
         Xs, Xd, _, _ = demos.stacked()
         speed = np.linalg.norm(Xd, axis=1)
         typical = float(np.median(speed[speed > 0])) if np.any(speed > 0) else 0.0
@@ -556,8 +564,15 @@ class SEDS(RegressorMixin, BaseEstimator):
         Ksf = max(1, min(int(self.strength_components or K), n // need))
         sf = StrengthFactor.fit(X, speed[moving], n_components=Ksf,
                                 random_state=self.random_state)
-        extent = float(np.max(np.ptp(Xs, axis=0)))
-        return sf, STRENGTH_RADIUS * max(extent, 1e-12)
+        extent = max(float(np.max(np.ptp(Xs, axis=0))), 1e-12)
+        radius = STRENGTH_RADIUS * extent
+        if getattr(demos, "_phase", None) is None:  # time-ordered demonstrations: a step
+            # the taper's rate v(x*) / r stays one that the data's own step can follow (motions
+            # that arrive fast, e.g. putts, would otherwise stop within a hundredth of the
+            # extent at rates of hundreds per second)
+            v_star = float(sf(np.asarray(demos.target, dtype=float)))
+            radius = max(radius, STRENGTH_STEPS * v_star * demos.estimated_dt())
+        return sf, min(radius, STRENGTH_RADIUS_MAX * extent)
 
 
 def _as_demonstrations(X, y, target) -> Demonstrations:
