@@ -148,3 +148,33 @@ def test_threads_default_and_a_bad_setting(monkeypatch):
     monkeypatch.setenv("SEDS_CASADI_THREADS", "two")
     with pytest.raises(ValueError, match="SEDS_CASADI_THREADS must be a positive integer"):
         kernel_threads(10_000)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.integers(1, 50_000), st.integers(1, 4))
+def test_blocked_sum_layout_covers_the_samples_with_little_padding(n, threads):
+    from seds_casadi.core.objectives import BLOCKED_MIN_SAMPLES, sum_layout
+
+    chunk, blocks = sum_layout(n, threads)
+    q = -(-n // threads)
+    assert chunk * blocks >= q and chunk * blocks - q < chunk
+    if q > BLOCKED_MIN_SAMPLES:  # both about sqrt(q): the work buffer is (chunk + blocks) P^2
+        assert chunk <= np.sqrt(q) + 1 and blocks <= np.sqrt(q) + 2
+    else:
+        assert (chunk, blocks) == (q, 1)
+
+
+def test_hessian_sum_keeps_a_small_work_buffer(monkeypatch):
+    """The regression: a serial map with a summed output kept n x P^2 doubles per call."""
+    monkeypatch.setenv("SEDS_CASADI_THREADS", "1")
+    layout = Layout(3, 2, with_noise=False)
+    X, Xd, w = _data(2, n=2000)
+    k = _kernels(layout, "mse", X, Xd, w)
+    P = layout.size
+    assert k._h.sz_w() < 0.1 * 2000 * P * P  # one serial sum: more than 2000 P^2
+    one = SumKernels(layout, "mse", MARGIN, X, Xd, np.ones(2000), 2000.0, compile=False,
+                     blocked=False)
+    assert one._h.sz_w() > 2000 * P * P
+    theta = 0.3 * np.random.default_rng(1).standard_normal(P)
+    np.testing.assert_allclose(k.hessian(theta), one.hessian(theta), rtol=1e-10, atol=1e-12)
+    assert k.value(theta) == pytest.approx(one.value(theta), rel=1e-12)

@@ -419,3 +419,25 @@ def test_rollout_warns_when_its_step_cannot_follow_the_stiffest_component(fitted
     with warnings.catch_warnings():
         warnings.simplefilter("error", ConvergenceWarning)
         model.rollout(x0, dt=1.0 / rate, method="euler", max_steps=100000)
+
+
+def test_solver_options_reach_ipopt_and_bad_ones_are_refused():
+    demos = load_lasa("Angle", n_samples=15)
+    # an option that shows in the result: IPOPT's own iteration limit
+    with pytest.warns(ConvergenceWarning, match="without converging"):
+        m = SEDS(2, random_state=0, solver_options={"max_iter": 3}).fit(demos).model_
+    assert m.fit_info["iterations"] <= 3 and m.fit_info["solver_options"] == {"max_iter": 3}
+    _assert_certified(m)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        m = SEDS(2, random_state=0, objective="mse",
+                 solver_options={"ipopt.mu_strategy": "adaptive"}).fit(demos).model_
+    _assert_certified(m)
+    assert m.fit_info["solver_options"] == {"ipopt.mu_strategy": "adaptive"}
+    with pytest.raises(ValueError, match="no_such_option"):
+        SEDS(2, solver_options={"no_such_option": 1}).fit(demos)
+    with pytest.raises(ValueError, match="refused"):
+        SEDS(2, solver_options={"mu_strategy": "fastest"}).fit(demos)
+    for bad in ("mu_strategy=adaptive", {1: 2}, {"tol": None}, {"tol": True}):
+        with pytest.raises(TypeError, match="solver_options"):
+            SEDS(2, solver_options=bad).fit(demos)

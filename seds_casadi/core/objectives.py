@@ -136,13 +136,37 @@ def kernel_threads(n_samples: int) -> int:
     return min(2, os.cpu_count() or 1)
 
 
-def _sum_map(f: ca.Function, name: str, n: int, reduce_out: list, threads: int) -> ca.Function:
-    """f summed over n samples (the columns of its data inputs), in ``threads`` contiguous
-    chunks of n / threads samples on as many threads (n must be a multiple of ``threads``)."""
+#: per-thread sample counts above this are summed in blocks (see :func:`sum_layout`)
+BLOCKED_MIN_SAMPLES = 64
+
+
+def sum_layout(n: int, threads: int) -> tuple[int, int]:
+    """(chunk, blocks) for summing n samples on ``threads`` threads: each thread sums
+    ``blocks`` blocks of ``chunk`` samples (n padded to threads x blocks x chunk).
+
+    CasADi's serial map with a summed output keeps every instance's output until it adds them:
+    for the Hessian that is n x P^2 doubles per call (39 MB at n = 2,000, P = 49), allocated
+    and zero-filled on every call, beyond the size glibc reuses, so that half of the Hessian's
+    time went to page faults (measured in ``benchmarks/README.md``). Blocks of about sqrt(n)
+    samples keep it to (chunk + blocks) x P^2; the padding is below sqrt(n) samples per thread.
+    """
+    q = -(-int(n) // max(1, int(threads)))
+    if q <= BLOCKED_MIN_SAMPLES:
+        return q, 1
+    chunk = int(np.ceil(np.sqrt(q)))
+    return chunk, -(-q // chunk)
+
+
+def _sum_map(f: ca.Function, name: str, chunk: int, blocks: int, reduce_out: list,
+             threads: int) -> ca.Function:
+    """f summed over threads x blocks x chunk samples (the columns of its data inputs): on
+    each of ``threads`` threads, ``blocks`` serial blocks of ``chunk`` serial samples."""
+    g = f.map(name + "_chunk", "serial", chunk, [0], reduce_out)
+    if blocks > 1:
+        g = g.map(name + "_blocks", "serial", blocks, [0], reduce_out)
     if threads <= 1:
-        return f.map(name, "serial", n, [0], reduce_out)
-    inner = f.map(name + "_chunk", "serial", n // threads, [0], reduce_out)
-    return inner.map(name, "thread", threads, [0], reduce_out, {"max_num_threads": threads})
+        return g
+    return g.map(name, "thread", threads, [0], reduce_out, {"max_num_threads": threads})
 
 
 class SumKernels:
@@ -165,11 +189,15 @@ class SumKernels:
         Build the exact per-sample Hessian kernel (not needed with IPOPT's L-BFGS).
     threads : int, optional
         Threads for the sums over samples (default :func:`kernel_threads`).
+    blocked : bool
+        Sum each thread's samples in blocks (:func:`sum_layout`); False: one serial sum per
+        thread, which needs n x P^2 doubles of work for the Hessian.
     """
 
     def __init__(self, layout: Layout, objective: str, margin: float, X: np.ndarray,
                  Xd: np.ndarray, coef: np.ndarray, norm: float, compile: bool = True,
-                 hessian: bool = True, threads: int | None = None) -> None:
+                 hessian: bool = True, threads: int | None = None,
+                 blocked: bool = True) -> None:
         g = sample_objective(layout, objective, margin)
         th, x, xd, c = g.sx_in()
         gv = g(th, x, xd, c)
@@ -187,16 +215,18 @@ class SumKernels:
         n = X.shape[0]
         threads = kernel_threads(n) if threads is None else max(1, int(threads))
         self.threads = threads
-        # the samples padded to a multiple of the threads with zero-weight copies of the last
+        # the samples padded to threads x blocks x chunk with zero-weight copies of the last
+        chunk, blocks = sum_layout(n, threads) if blocked else (-(-n // threads), 1)
         coef = np.asarray(coef, dtype=float)
-        pad = -n % threads
+        pad = threads * blocks * chunk - n
         if pad:
             X = np.vstack([X, np.repeat(X[-1:], pad, 0)])
             Xd = np.vstack([Xd, np.repeat(Xd[-1:], pad, 0)])
             coef = np.r_[coef, np.zeros(pad)]
-        self._g = _sum_map(funcs[0], "J_sum", n + pad, [0], threads)
-        self._fg = _sum_map(funcs[1], "JG_sum", n + pad, [0, 1], threads)
-        self._h = _sum_map(funcs[2], "H_sum", n + pad, [0], threads) if hessian else None
+        self._g = _sum_map(funcs[0], "J_sum", chunk, blocks, [0], threads)
+        self._fg = _sum_map(funcs[1], "JG_sum", chunk, blocks, [0, 1], threads)
+        self._h = (_sum_map(funcs[2], "H_sum", chunk, blocks, [0], threads) if hessian
+                   else None)
         self._data = [ca.DM(X.T), ca.DM(Xd.T), ca.DM(coef).T]
         self.norm = float(norm)
         self.size = layout.size

@@ -398,10 +398,12 @@ def build_problem(demos: Demonstrations, n_components: int, objective: str,
     strategy = hessian_strategy(hessian, layout.size)
     # the constrained form stays on one thread: its IPOPT path is sensitive to the order of
     # the sums (a 2-D test problem converged serially and ended 1.8e-6 infeasible at the
-    # iteration limit with two threads); the by-construction form is stable at every iterate
-    threads = 1 if formulation == "constrained" else None
+    # iteration limit with two threads), and to the blocked sums too (the test problems of
+    # tests/test_lyapunov.py ended 0.33 and 2.4e-6 infeasible): it keeps one serial sum
+    constrained = formulation == "constrained"
     kernels = SumKernels(layout, objective, stability_margin, Xs, Xds, coef, norm,
-                         compile=compile, hessian=strategy == "exact", threads=threads)
+                         compile=compile, hessian=strategy == "exact",
+                         threads=1 if constrained else None, blocked=not constrained)
     return SEDSProblem(
         layout=layout, objective=objective, X=Xs, Xd=Xds, weights=w,
         position_scale=sx, velocity_scale=sv, target=demos.target.copy(), theta0=theta0,

@@ -211,6 +211,12 @@ class SEDS(RegressorMixin, BaseEstimator):
         whose size does not depend on the number of samples); the joint problem then improves on
         it. The problem is non-convex, so the start decides which optimum is reached; which one
         is better depends on the data (compared on LASA in ``benchmarks/README.md``).
+    solver_options : dict or None, default None
+        Extra IPOPT options, by IPOPT's names (``{"mu_strategy": "adaptive"}``; the ``ipopt.``
+        prefix is added), over the learner's own (``_ipopt_options``). Every model is certified
+        after the solve whatever the options. ``mu_strategy="adaptive"`` is measured in
+        ``benchmarks/README.md``: on the ds-opt LASA protocol it cut the median fit time, but
+        not on every shape.
     verbose : bool, default False
         Print IPOPT's iteration log.
     """
@@ -238,6 +244,7 @@ class SEDS(RegressorMixin, BaseEstimator):
         strength_components: int | None = None,
         gain_limit: float | None = None,
         init: str = "joint-em",
+        solver_options: dict | None = None,
         verbose: bool = False,
     ) -> None:
         # scikit-learn convention: store the parameters as given; fit() validates them
@@ -262,6 +269,7 @@ class SEDS(RegressorMixin, BaseEstimator):
         self.strength_components = strength_components
         self.gain_limit = gain_limit
         self.init = init
+        self.solver_options = solver_options
         self.verbose = verbose
 
     def _validated(self) -> dict:
@@ -297,6 +305,17 @@ class SEDS(RegressorMixin, BaseEstimator):
                                or sk < 1):
             raise ValueError(f"strength_components must be a positive integer or None, got "
                              f"{sk!r}")
+        so = self.solver_options
+        if so is not None:
+            if not isinstance(so, dict) or not all(isinstance(k, str) for k in so):
+                raise TypeError("solver_options must be a dict of IPOPT option names to values, "
+                                f"got {so!r}")
+            bad = [k for k, v in so.items()
+                   if isinstance(v, bool) or not isinstance(v, (str, int, float, np.integer,
+                                                                np.floating))]
+            if bad:
+                raise TypeError(f"solver_options values must be strings or numbers; not those "
+                                f"of {bad}")
         if self.hessian not in HESSIANS:
             raise ValueError(f"unknown hessian {self.hessian!r}; valid: {', '.join(HESSIANS)}")
         for name in ("omega_lower", "omega_upper"):
@@ -427,6 +446,8 @@ class SEDS(RegressorMixin, BaseEstimator):
             # early "acceptable" stop must be feasible to the certificate's precision
             opts["ipopt.constr_viol_tol"] = 1e-9
             opts["ipopt.acceptable_constr_viol_tol"] = 1e-9
+        for k, v in (self.solver_options or {}).items():
+            opts[k if k.startswith("ipopt.") else f"ipopt.{k}"] = v
         return opts
 
     def _constraints(self, prob: SEDSProblem, params: dict, theta_sym
@@ -479,7 +500,15 @@ class SEDS(RegressorMixin, BaseEstimator):
                   time.perf_counter() - t0)
         progress = _Progress(prob.layout.size, int(nlp["g"].numel()) if "g" in nlp else 0, label)
         opts = dict(self._ipopt_options(params, prob.hessian), iteration_callback=progress)
-        solver = ca.nlpsol("seds", "ipopt", nlp, opts)
+        try:
+            solver = ca.nlpsol("seds", "ipopt", nlp, opts)
+        except RuntimeError as exc:
+            if self.solver_options and "option" in str(exc).lower():  # IPOPT printed the valid
+                # settings of a bad value above
+                raise ValueError(f"IPOPT refused solver_options {self.solver_options!r}: "
+                                 f"{str(exc).splitlines()[-1].split(': ', 1)[-1]} (names as "
+                                 "in IPOPT's documentation, e.g. 'mu_strategy')") from None
+            raise
         t_built = time.perf_counter()
         res = solver(x0=prob.theta0, lbx=prob.lbx, ubx=prob.ubx, **bounds)
         stats = solver.stats()
@@ -527,6 +556,7 @@ class SEDS(RegressorMixin, BaseEstimator):
             "strength_components": None if strength is None else len(strength.priors),
             "n_samples": int(prob.X.shape[0]), "hessian": prob.hessian,
             "compiled_kernels": prob.kernels.compiled, "solver": "ipopt",
+            "solver_options": dict(self.solver_options or {}),
         }
         try:
             model = StableDS(priors, means, covs, prob.target, fit_info=info, status=status,
