@@ -213,3 +213,12 @@ def test_taper_radius_rule(wshape):
         m = SEDS(2, random_state=0, max_iter=50).fit(X, V, target=demos.target).model_
     ext = float(np.max(np.ptp(X, axis=0)))
     assert m.strength_radius == pytest.approx(0.01 * ext, rel=1e-12)
+
+
+def test_time_ordered_tells_trajectories_from_loose_samples(wshape):
+    demos, _ = wshape
+    assert demos.time_ordered
+    X, V = np.concatenate(demos.positions), np.concatenate(demos.velocities)
+    from seds_casadi import Demonstrations
+
+    assert not Demonstrations.from_samples(X, V).time_ordered

@@ -295,6 +295,12 @@ class Demonstrations:
 
     # ------------------------------------------------------------------ views
     @property
+    def time_ordered(self) -> bool:
+        """Whether the samples are trajectories in time order (False for
+        :meth:`from_samples`, whose samples carry no phase and no time step)."""
+        return getattr(self, "_phase", None) is None
+
+    @property
     def n_demos(self) -> int:
         """Number of demonstrations N."""
         return len(self.positions)

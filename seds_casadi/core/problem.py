@@ -451,7 +451,7 @@ def check_approach(demos: Demonstrations, X: np.ndarray, Xd: np.ndarray) -> None
     ok = (r > 0) & (v > 0)
     mean_cos = float(np.mean(-np.sum(X[ok] * Xd[ok], axis=1) / (r[ok] * v[ok]))) if ok.any() \
         else 1.0
-    ordered = getattr(demos, "_phase", None) is None
+    ordered = demos.time_ordered
     start = [np.linalg.norm(p[0]) for p in demos.shifted_positions]
     end = [np.linalg.norm(p[-1]) for p in demos.shifted_positions]
     away = all(e >= s0 for s0, e in zip(start, end)) if ordered else mean_cos < -0.5

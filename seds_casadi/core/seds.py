@@ -596,7 +596,7 @@ class SEDS(RegressorMixin, BaseEstimator):
                                 random_state=self.random_state)
         extent = max(float(np.max(np.ptp(Xs, axis=0))), 1e-12)
         radius = STRENGTH_RADIUS * extent
-        if getattr(demos, "_phase", None) is None:  # time-ordered demonstrations: a step
+        if demos.time_ordered:  # trajectories in time order have a step
             # the taper's rate v(x*) / r stays one that the data's own step can follow (motions
             # that arrive fast, e.g. putts, would otherwise stop within a hundredth of the
             # extent at rates of hundreds per second)

@@ -37,7 +37,7 @@ from ..codegen import CachedFunctionMixin, batch_evaluate
 from .errors import ConvergenceWarning, ModelFileError, StabilityError
 from .gmm import responsibilities_sx
 from .model_files import read_guarded, write_guarded
-from .strength import StrengthFactor
+from .strength import StrengthFactor, as_points
 
 __all__ = ["StableDS", "certify"]
 
@@ -259,17 +259,6 @@ class StableDS(CachedFunctionMixin):
         return len(self.target)
 
     # ------------------------------------------------------------ evaluation
-    def _check_points(self, X, name="X") -> tuple[np.ndarray, bool]:
-        X = np.asarray(X, dtype=float)
-        single = X.ndim == 1
-        X2 = np.atleast_2d(X)
-        if X2.ndim != 2 or X2.shape[1] != self.n_dims:
-            raise ValueError(f"{name} must have shape (n, {self.n_dims}) or ({self.n_dims},), "
-                             f"got {X.shape}")
-        if not np.all(np.isfinite(X2)):
-            raise ValueError(f"{name} contains NaN or infinite values")
-        return X2, single
-
     def predict(self, X) -> np.ndarray:
         """Velocity f(x) of Eq. 5 at each point (the expression of :meth:`to_casadi`; with a
         strength factor, f_v(x) of the class docstring).
@@ -282,7 +271,7 @@ class StableDS(CachedFunctionMixin):
         -------
         array, same shape as X
         """
-        X2, single = self._check_points(X)
+        X2, single = as_points(X, self.n_dims)
         if len(X2) == 0:
             return X2.copy()
         F = batch_evaluate(self._function(), X2.T)[0]
@@ -315,7 +304,7 @@ class StableDS(CachedFunctionMixin):
             reached the target, or at ``max_steps``)
         info : dict, only with ``return_info``
         """
-        X, single = self._check_points(x0, "x0")
+        X, single = as_points(x0, self.n_dims, "x0")
         if not (np.isfinite(dt) and dt > 0):
             raise ValueError(f"dt must be positive, got {dt}")
         if method not in ("rk4", "euler"):
