@@ -9,6 +9,7 @@ from oracles import seds_objective as objective_numpy
 from oracles import unpack as unpack_oracle
 
 from seds_casadi import SEDS
+from seds_casadi.codegen import compiler_available
 from seds_casadi.core.objectives import SumKernels
 from seds_casadi.core.parametrization import OBJECTIVES, Layout, unpack_casadi, unpack_numpy
 
@@ -167,6 +168,7 @@ def test_blocked_sum_layout_covers_the_samples_with_little_padding(n, threads):
 def test_hessian_sum_keeps_a_small_work_buffer(monkeypatch):
     """The regression: a serial map with a summed output kept n x P^2 doubles per call."""
     monkeypatch.setenv("SEDS_CASADI_THREADS", "1")
+    monkeypatch.setenv("SEDS_CASADI_SIMD", "0")  # CasADi's maps (the vectorised sums: below)
     layout = Layout(3, 2, with_noise=False)
     X, Xd, w = _data(2, n=2000)
     k = _kernels(layout, "mse", X, Xd, w)
@@ -178,3 +180,49 @@ def test_hessian_sum_keeps_a_small_work_buffer(monkeypatch):
     theta = 0.3 * np.random.default_rng(1).standard_normal(P)
     np.testing.assert_allclose(k.hessian(theta), one.hessian(theta), rtol=1e-10, atol=1e-12)
     assert k.value(theta) == pytest.approx(one.value(theta), rel=1e-12)
+
+
+needs_cc = pytest.mark.skipif(compiler_available() is None, reason="no C compiler")
+
+
+@needs_cc
+@pytest.mark.parametrize("objective", OBJECTIVES)
+@pytest.mark.parametrize("threads", [1, 2])
+def test_vectorised_sums_equal_casadis_maps_and_the_oracle(objective, threads, monkeypatch):
+    """Two implementations of J, grad J and Hess J (codegen.column_sum against CasADi's
+    compiled maps), and J against the numpy oracle; 1,003 samples (padded to the lanes and
+    threads with zero-weight copies)."""
+    layout = Layout(3, 2, with_noise=objective == "likelihood")
+    X, Xd, w = _data(8, n=1003)
+    w_used = w if objective == "direction" else np.ones(len(X))
+    monkeypatch.setenv("SEDS_CASADI_THREADS", str(threads))
+    monkeypatch.setenv("SEDS_CASADI_SIMD", "0")
+    ref = _kernels(layout, objective, X, Xd, w, compile=True)
+    monkeypatch.setenv("SEDS_CASADI_SIMD", "1")
+    fast = _kernels(layout, objective, X, Xd, w, compile=True)
+    assert (ref.engine, fast.engine) == ("casadi", "simd")
+    rng = np.random.default_rng(11)
+    for _ in range(3):
+        theta = 0.4 * rng.standard_normal(layout.size)
+        oracle = objective_numpy(theta, layout, X, Xd, w_used, objective, MARGIN)
+        assert fast.value(theta) == pytest.approx(oracle, rel=1e-10, abs=1e-12)
+        assert float(fast.casadi_function()(theta)) == pytest.approx(oracle, rel=1e-10,
+                                                                     abs=1e-12)
+        np.testing.assert_allclose(fast.gradient(theta), ref.gradient(theta), rtol=1e-9,
+                                   atol=1e-11)
+        H = fast.hessian(theta)
+        np.testing.assert_array_equal(H, H.T)
+        np.testing.assert_allclose(H, ref.hessian(theta), rtol=1e-9, atol=1e-10)
+
+
+@needs_cc
+def test_a_fit_says_which_sums_it_used(spiral_demos, monkeypatch):
+    fast = SEDS(2, objective="mse", random_state=0).fit(spiral_demos).model_
+    monkeypatch.setenv("SEDS_CASADI_SIMD", "0")
+    slow = SEDS(2, objective="mse", random_state=0).fit(spiral_demos).model_
+    assert (fast.fit_info["sums"], slow.fit_info["sums"]) == ("simd", "casadi")
+    # the same problem, summed in another order: the same optimum to the solver's precision
+    assert fast.fit_info["objective"] == pytest.approx(slow.fit_info["objective"], rel=1e-3)
+    con = SEDS(2, objective="mse", random_state=0, formulation="constrained",
+               max_iter=50).build_problem(spiral_demos)
+    assert con.kernels.engine == "casadi"  # its IPOPT path depends on the order of the sums

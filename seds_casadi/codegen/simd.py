@@ -122,21 +122,30 @@ def _lookup_lines(L: dict) -> list[str]:
     return body
 
 
-def _instruction_lines(step: ca.Function) -> tuple[list[str], set[str]]:
-    """One C statement per instruction of the SX Function (work variables ``w``, outputs
-    ``o``), and the vector math functions they call."""
+def _step_read(arg: int, nz: int) -> str:
+    """A step's inputs in C: the state ``S`` (column ``i``), then the looked-up values ``a``."""
+    return f"a{nz}" if arg == 1 else f"S[{nz} * stride + i]"
+
+
+def _step_write(res: int, nz: int) -> str:
+    return f"o{nz}"
+
+
+def _instruction_lines(step: ca.Function, read=_step_read, write=_step_write
+                       ) -> tuple[list[str], set[str]]:
+    """One C statement per instruction of the SX Function (work variables ``w``), and the
+    vector math functions they call. ``read(arg, nz)`` and ``write(res, nz)`` give the C
+    expressions of input ``arg``'s and output ``res``'s entry ``nz``."""
     body: list[str] = []
     used: set[str] = set()
     for k in range(step.n_instructions()):
         op = step.instruction_id(k)
         ins = step.instruction_input(k)
         out = step.instruction_output(k)
-        if op == ca.OP_INPUT and ins[0] == 1:
-            body.append(f"w{out[0]} = a{ins[1]};")
-        elif op == ca.OP_INPUT:
-            body.append(f"w{out[0]} = S[{ins[1]} * stride + i];")
+        if op == ca.OP_INPUT:
+            body.append(f"w{out[0]} = {read(ins[0], ins[1])};")
         elif op == ca.OP_OUTPUT:
-            body.append(f"o{out[1]} = w{ins[0]};")
+            body.append(f"{write(out[0], out[1])} = w{ins[0]};")
         elif op == ca.OP_CONST:
             c = float(step.instruction_constant(k))
             lit = repr(c) if np.isfinite(c) else ("NAN" if np.isnan(c) else
@@ -194,6 +203,15 @@ void {name}(int n, int stride, int steps, double *restrict S, const double *rest
 """
 
 
+def load_library(path: str) -> ctypes.CDLL:
+    """A compiled library, loaded once per process."""
+    with _LOCK:
+        lib = _LOADED.get(path)
+        if lib is None:
+            lib = _LOADED[path] = ctypes.CDLL(path)
+        return lib
+
+
 def _cpu_key() -> str:
     try:
         with open("/proc/cpuinfo") as fh:
@@ -248,11 +266,7 @@ class SimdLoop:
             path = shared_library(src.encode(), "simd", self.FLAGS, libs, key_extra=_cpu_key())
         except CompileError as exc:
             raise RuntimeError(f"compiling the SIMD loop failed: {exc}") from None
-        with _LOCK:
-            lib = _LOADED.get(path)
-            if lib is None:
-                lib = _LOADED[path] = ctypes.CDLL(path)
-        fn = getattr(lib, name)
+        fn = getattr(load_library(path), name)
         fn.restype = None
         fn.argtypes = [ctypes.c_int, ctypes.c_int, ctypes.c_int,
                        ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_double)]

@@ -426,7 +426,7 @@ class SEDS(RegressorMixin, BaseEstimator):
             raise NotFittedError("this SEDS learner is not fitted yet: call fit(demos) first")
         return model
 
-    def _ipopt_options(self, params: dict, hessian: str) -> dict:
+    def _ipopt_options(self, params: dict, hessian: str, constrained: bool = False) -> dict:
         opts = {
             "print_time": False,
             "ipopt.print_level": 5 if self.verbose else 0,
@@ -441,9 +441,11 @@ class SEDS(RegressorMixin, BaseEstimator):
             "ipopt.acceptable_iter": 5,
             "ipopt.hessian_approximation": hessian,
         }
-        if self.formulation == "constrained":
-            # Eq. 10 as constraints: IPOPT's iterates satisfy them only at convergence, so an
-            # early "acceptable" stop must be feasible to the certificate's precision
+        if constrained:
+            # Eq. 10 as constraints, the arrival constraint or the user's: IPOPT's iterates
+            # satisfy them only at convergence, so an early "acceptable" stop must be feasible
+            # to the certificate's precision (with the default 1e-2, an arrival-constraint fit
+            # once stopped 5e-5 infeasible)
             opts["ipopt.constr_viol_tol"] = 1e-9
             opts["ipopt.acceptable_constr_viol_tol"] = 1e-9
         for k, v in (self.solver_options or {}).items():
@@ -499,7 +501,8 @@ class SEDS(RegressorMixin, BaseEstimator):
         _LOG.info("%s: solving with IPOPT (problem built in %.1f s)", label,
                   time.perf_counter() - t0)
         progress = _Progress(prob.layout.size, int(nlp["g"].numel()) if "g" in nlp else 0, label)
-        opts = dict(self._ipopt_options(params, prob.hessian), iteration_callback=progress)
+        opts = dict(self._ipopt_options(params, prob.hessian, constrained=bool(g)),
+                    iteration_callback=progress)
         try:
             solver = ca.nlpsol("seds", "ipopt", nlp, opts)
         except RuntimeError as exc:
@@ -555,7 +558,8 @@ class SEDS(RegressorMixin, BaseEstimator):
                                   else None),
             "strength_components": None if strength is None else len(strength.priors),
             "n_samples": int(prob.X.shape[0]), "hessian": prob.hessian,
-            "compiled_kernels": prob.kernels.compiled, "solver": "ipopt",
+            "compiled_kernels": prob.kernels.compiled, "sums": prob.kernels.engine,
+            "solver": "ipopt",
             "solver_options": dict(self.solver_options or {}),
         }
         try:
