@@ -153,7 +153,6 @@ class ColumnSum:
             U[pad_row, n:] = 0.0
         self._U = np.ascontiguousarray(U)
         self._parts = [(k * per, per) for k in range(threads)]
-        self._acc = np.zeros((threads, sum(self._sizes) * LANES))
         self._pool = ThreadPoolExecutor(threads) if threads > 1 else None
 
     def __call__(self, p) -> list[np.ndarray]:
@@ -164,19 +163,19 @@ class ColumnSum:
         dbl = ctypes.POINTER(ctypes.c_double)
         pp = p.ctypes.data_as(dbl)
         stride, ub = self._U.shape[1], self._U.ctypes.data
-        self._acc[:] = 0.0
+        # per call (a few thousand doubles), so that calls from several threads do not share it
+        acc = np.zeros((len(self._parts), sum(self._sizes) * LANES))
 
         def call(k: int) -> None:
             lo, m = self._parts[k]
-            self._fn(m, stride, pp, ctypes.cast(ub + 8 * lo, dbl),
-                     self._acc[k].ctypes.data_as(dbl))
+            self._fn(m, stride, pp, ctypes.cast(ub + 8 * lo, dbl), acc[k].ctypes.data_as(dbl))
 
         if self._pool is None:
             call(0)
         else:
             for fut in [self._pool.submit(call, k) for k in range(len(self._parts))]:
                 fut.result()
-        total = self._acc.sum(axis=0).reshape(-1, LANES).sum(axis=1)
+        total = acc.sum(axis=0).reshape(-1, LANES).sum(axis=1)
         out, at = [], 0
         for size, shape in zip(self._sizes, self._shapes):
             out.append(total[at:at + size].reshape(shape, order="F"))

@@ -202,6 +202,12 @@ class SumKernels:
     blocked : bool
         Sum each thread's samples in blocks (:func:`sum_layout`); False: one serial sum per
         thread, which needs n x P^2 doubles of work for the Hessian.
+
+    Attributes
+    ----------
+    engine : {"simd", "casadi"}
+        Who sums over the samples: the vectorised C loops (with ``compile``, ``blocked``, a C
+        compiler and ``SEDS_CASADI_SIMD`` not ``0``) or CasADi's maps.
     """
 
     def __init__(self, layout: Layout, objective: str, margin: float, X: np.ndarray,
