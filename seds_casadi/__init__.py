@@ -6,6 +6,7 @@ A Dynamical System-based Approach" (Advanced Robotics, 2012), and of SEDS in Pyt
 
 from .core.demonstrations import Demonstrations, load_demonstrations, save_demonstrations
 from .core.errors import ConvergenceWarning, ModelFileError, SEDSError, SolverError, StabilityError
+from .core.search import DemoSearchCV
 from .core.seds import SEDS, SEDSProblem
 from .core.stable_ds import StableDS, certify
 
@@ -17,6 +18,7 @@ __all__ = [
     "save_demonstrations",
     "SEDS",
     "SEDSProblem",
+    "DemoSearchCV",
     "StableDS",
     "certify",
     "SEDSError",

@@ -72,6 +72,30 @@ def test_cli_fit_with_a_learned_lyapunov_matrix_and_a_gain_limit(tmp_path, spira
         assert np.linalg.eigvalsh(A.T @ P + P @ A).max() < 0
 
 
+def test_cli_fit_chooses_settings_on_held_out_demonstrations(tmp_path, spiral_demos):
+    demo_file = tmp_path / "demos.npz"
+    save_demonstrations(demo_file, spiral_demos)
+    out = tmp_path / "out"
+    res = subprocess.run(_cli() + ["fit", str(demo_file), "-K", "2", "--objective", "mse",
+                                   "--max-iter", "150", "--choose", "lyapunov=identity,learned",
+                                   "--choose", "gain-limit=none,10", "--out", str(out)],
+                         capture_output=True, text=True, timeout=600)
+    assert res.returncode == 0, res.stderr
+    model = StableDS.load(out / "model.npz")
+    record = model.fit_info["search"]
+    assert len(record["candidates"]) == 4
+    assert {"lyapunov": "identity", "gain_limit": None} in record["candidates"]
+    assert record["best_params"]["lyapunov"] == model.fit_info["lyapunov"]
+    assert "rank" in res.stdout and '"chosen"' in res.stdout
+    assert "fold" in res.stdout + res.stderr  # the search's progress lines
+    bad = subprocess.run(_cli() + ["fit", str(demo_file), "--choose", "lyapunov"],
+                         capture_output=True, text=True, timeout=120)
+    assert bad.returncode == 2 and "NAME=A,B" in bad.stderr
+    bad = subprocess.run(_cli() + ["fit", str(demo_file), "--choose", "n_gaussians=2,3"],
+                         capture_output=True, text=True, timeout=120)
+    assert bad.returncode == 2 and "n_gaussians" in bad.stderr
+
+
 def test_cli_lasa_writes_the_csv_with_the_documented_columns(tmp_path):
     out = tmp_path / "lasa"
     res = subprocess.run(_cli() + ["lasa", "--shapes", "Angle", "--objectives", "direction",

@@ -71,8 +71,12 @@ def test_learned_p_parametrization_is_stable_for_every_theta(K, d, seed):
     theta = 1.5 * np.random.default_rng(seed).standard_normal(layout.size)
     p = unpack_numpy(theta, layout, MARGIN)
     ref = unpack_oracle(theta, layout, MARGIN)
-    for key in ("priors", "mu", "Sx", "A", "P"):
+    for key in ("priors", "mu", "Sx", "P"):
         np.testing.assert_allclose(p[key], ref[key], rtol=1e-8, atol=1e-10)
+    # A_k = P^-1 S_k: the two solves differ by rounding amplified by cond(P), which a random
+    # theta can make 1e9 (seed 713180 for K = 1, d = 5)
+    rtol_a = max(1e-8, 1e-15 * np.linalg.cond(ref["P"]))
+    np.testing.assert_allclose(p["A"], ref["A"], rtol=rtol_a, atol=1e-10)
     P = p["P"]
     assert np.trace(P) == pytest.approx(d)
     assert np.linalg.eigvalsh(P).min() > 0

@@ -108,7 +108,35 @@ def _add_fit(sub, quiet) -> None:
                    help="how a direction-objective model gets the demonstrated speeds: a "
                         "strength factor v(x) by GMR along the certified streamlines (Eq. 12), "
                         "or one factor on every gain [strength]")
+    f.add_argument("--choose", action="append", type=_choice, default=[], metavar="NAME=A,B",
+                   help="choose this SEDS setting among the values by leave-one-demonstration-"
+                        "out reproduction (DemoSearchCV), e.g. --choose objective=mse,direction "
+                        "--choose lyapunov=identity,learned; repeat for a grid. The other "
+                        "options are common to every candidate; the chosen one is refitted on "
+                        "all demonstrations [no search]")
     f.add_argument("--out", default="seds_out", help="output folder [seds_out]")
+
+
+def _choice(text: str) -> tuple[str, list]:
+    """``NAME=A,B,...`` of ``fit --choose``: a SEDS parameter and its candidate values."""
+    name, sep, values = text.partition("=")
+    name = name.strip().replace("-", "_")
+    if not sep or not name or not values.strip():
+        raise argparse.ArgumentTypeError(f"expected NAME=A,B (e.g. objective=mse,direction), got "
+                                         f"{text!r}")
+
+    def value(v: str):
+        v = v.strip()
+        if v.lower() == "none":
+            return None
+        for cast in (int, float):
+            try:
+                return cast(v)
+            except ValueError:
+                pass
+        return v
+
+    return name, [value(v) for v in values.split(",") if v.strip()]
 
 
 def _add_lasa(sub, quiet) -> None:
@@ -253,10 +281,22 @@ def _cmd_fit(a) -> int:
     kw = {"dt": a.dt} if a.dt is not None else {}
     demos = load_demonstrations(a.demonstrations, **kw)
     print(f"loaded {demos}")
-    model = SEDS(a.components, objective=a.objective, random_state=a.seed,
-                 max_iter=a.max_iter, lyapunov=a.lyapunov, formulation=a.formulation,
-                 gain_limit=a.gain_limit, init=a.init,
-                 speed_calibration=a.speed).fit(demos).model_
+    learner = SEDS(a.components, objective=a.objective, random_state=a.seed,
+                   max_iter=a.max_iter, lyapunov=a.lyapunov, formulation=a.formulation,
+                   gain_limit=a.gain_limit, init=a.init, speed_calibration=a.speed)
+    if a.choose:
+        from ..core.search import DemoSearchCV
+
+        grid = dict(a.choose)
+        if len(grid) < len(a.choose):
+            raise ValueError("--choose names a setting twice; give all its values in one: "
+                             "--choose objective=mse,direction")
+        search = DemoSearchCV(learner, grid, verbose=1).fit(demos)
+        print(search.table())
+        print(f"chosen: {search.best_params_}")
+        model = search.model_
+    else:
+        model = learner.fit(demos).model_
     os.makedirs(a.out, exist_ok=True)
     path = os.path.join(a.out, "model.npz")
     model.save(path)
@@ -274,6 +314,8 @@ def _cmd_fit(a) -> int:
                               title=f"SEDS ({a.objective}, K={model.n_components})")
     save_figure(fig, os.path.join(a.out, "streamlines.png"))
     info = {k: model.fit_info[k] for k in ("status", "iterations", "objective", "seconds")}
+    if "search" in model.fit_info:
+        info["chosen"] = model.fit_info["search"]["best_params"]
     print(json.dumps(info, indent=1))
     print(f"wrote {path} and {os.path.join(a.out, 'streamlines.png')}")
     return 0

@@ -70,6 +70,7 @@ from ..core.model_selection import (  # noqa: F401 - re-exported
     dsopt_elbow_k,
 )
 from ..core.parametrization import OBJECTIVES
+from ..core.search import DemoSearchCV
 from ..core.seds import SEDS
 
 __all__ = ["LasaResult", "evaluate_shape", "run_lasa", "write_csv", "summary_table", "PROTOCOLS",
@@ -196,6 +197,8 @@ class DsOptResult:
     published_k: int
     #: the SEDS objective reached on the training set (``fit_info["objective"]``)
     objective_value: float = float("nan")
+    #: with ``param_grid``: the settings :class:`~seds_casadi.core.search.DemoSearchCV` chose
+    chosen: str = ""
 
 
 @dataclass(frozen=True)
@@ -303,7 +306,8 @@ def dsopt_scores(predict, data: DsOptSet) -> tuple[float, float, float, np.ndarr
 def evaluate_shape_dsopt(shape: str, objective: str = "mse", n_components: int | str = "bic",
                          k_max: int = 15, random_state: int = 0, bic_rule: str = "ds-opt",
                          max_iter: int = 1000, figure_path: str | None = None,
-                         seds_options: dict | None = None) -> list[DsOptResult]:
+                         seds_options: dict | None = None,
+                         param_grid: dict | list | None = None) -> list[DsOptResult]:
     """Fit one shape under the ds-opt protocol and score it on the training and test sets.
 
     Parameters
@@ -325,6 +329,11 @@ def evaluate_shape_dsopt(shape: str, objective: str = "mse", n_components: int |
         Write a figure (test demonstrations, their reproductions, streamlines) there.
     seds_options : dict, optional
         More options of :class:`~seds_casadi.SEDS` (e.g. ``{"lyapunov": "learned"}``).
+    param_grid : dict or list of dict, optional
+        Choose among these settings by :class:`~seds_casadi.core.search.DemoSearchCV` on the
+        training demonstrations alone (leave one out, each reproduced by the protocol's rule
+        from its 20th point), then refit the chosen one on all four; ``seconds`` is then the
+        whole search. The test demonstrations play no part in the choice.
 
     Returns
     -------
@@ -338,8 +347,16 @@ def evaluate_shape_dsopt(shape: str, objective: str = "mse", n_components: int |
     t0 = time.perf_counter()
     with warnings.catch_warnings():  # the status is recorded and counted in the summary
         warnings.simplefilter("ignore", ConvergenceWarning)
-        model = SEDS(K, objective=objective, random_state=random_state, max_iter=max_iter,
-                     **(seds_options or {})).fit(sets["train"].demonstrations()).model_
+        learner = SEDS(K, objective=objective, random_state=random_state, max_iter=max_iter,
+                       **(seds_options or {}))
+        chosen = ""
+        if param_grid:
+            search = DemoSearchCV(learner, param_grid, dt=0.01, speed_tol=0.1, max_steps=3000,
+                                  start_index=DSOPT_START_INDEX)
+            model = search.fit(sets["train"].demonstrations()).model_
+            chosen = ", ".join(f"{k}={v}" for k, v in search.best_params_.items())
+        else:
+            model = learner.fit(sets["train"].demonstrations()).model_
     seconds = time.perf_counter() - t0
     cert = model.certificate
     certified = bool(cert["max_eig_lyapunov"] < 0 and cert["min_eig_cov"] > 0)
@@ -355,7 +372,7 @@ def evaluate_shape_dsopt(shape: str, objective: str = "mse", n_components: int |
             int(model.fit_info["iterations"]), K, certified,
             str(model.fit_info["status"]), how, k_seconds, len(paths[name]), end, rate,
             float(pub[off]), float(pub[off + 1]), float(pub[off + 2]), int(pub[0]),
-            float(model.fit_info["objective"])))
+            float(model.fit_info["objective"]), chosen))
     if figure_path:
         from .plotting import _plt, plot_streamlines, save_figure
 

@@ -10,6 +10,7 @@ from .datasets import LASA_SHAPES, LASA_SINGLE_SHAPES, load_lasa
 from .demonstrations import Demonstrations, load_demonstrations, save_demonstrations
 from .errors import ConvergenceWarning, ModelFileError, SEDSError, SolverError, StabilityError
 from .model_selection import bic_n_components
+from .search import DemoSearchCV
 from .seds import SEDS, SEDSProblem
 from .stable_ds import StableDS, certify
 from .strength import StrengthFactor, StrengthFactorLearner
@@ -18,5 +19,5 @@ __all__ = [
     "Demonstrations", "load_demonstrations", "save_demonstrations", "SEDS", "SEDSProblem",
     "StableDS", "certify", "load_lasa", "LASA_SHAPES", "LASA_SINGLE_SHAPES", "SEDSError",
     "SolverError", "StabilityError", "ModelFileError", "ConvergenceWarning", "bic_n_components",
-    "StrengthFactor", "StrengthFactorLearner",
+    "StrengthFactor", "StrengthFactorLearner", "DemoSearchCV",
 ]

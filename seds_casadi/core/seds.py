@@ -108,7 +108,8 @@ class SEDS(RegressorMixin, BaseEstimator):
         the elbow of the BIC curve, as ds-opt does
         (:func:`~seds_casadi.core.model_selection.bic_n_components`; on smooth data the BIC
         minimum lies at the largest K tried; the scores are in ``fit_info["bic"]``).
-        ``GridSearchCV`` over K is the held-out alternative.
+        :class:`~seds_casadi.core.search.DemoSearchCV` (held-out demonstrations, reproduced and
+        scored) or ``GridSearchCV`` over K are the held-out alternatives.
     objective : {"direction", "mse", "likelihood"}, default "direction"
         ``"direction"``: the paper's Eq. 9 (weighted cosine between demonstrated and model
         velocities, weights of Eq. 11); ``"mse"`` and ``"likelihood"``: the original SEDS objectives
