@@ -13,6 +13,7 @@ Usage::
     python benchmarks/bench_lyapunov.py --variants plain learned constrained constrained-learned \\
         --shapes Leaf_1 JShape BendedLine WShape
     python benchmarks/bench_lyapunov.py --figures --shapes Leaf_1 JShape --out docs
+    python benchmarks/bench_lyapunov.py --variants plain learned-g10 --repeats 10   # seed means
 """
 
 from __future__ import annotations
@@ -76,6 +77,35 @@ def _one(args):
             "objective": test.objective_value, "chosen": test.chosen,
             "certified": test.certified, "pub": (test.published_rmse_mmps, test.published_e_dot,
                                                  test.published_dtwd_mm)}
+
+
+def _mean_over_seeds(rows: list[dict]) -> list[dict]:
+    """One row per (shape, variant): metrics and objective averaged over the seeds that ran,
+    time and iterations their medians; a seed that failed makes the row an error."""
+    out = []
+    keys = list(dict.fromkeys((r["shape"], r["variant"]) for r in rows))
+    for shape, variant in keys:
+        rs = [r for r in rows if r["shape"] == shape and r["variant"] == variant]
+        errs = [r for r in rs if "error" in r]
+        if errs:
+            out.append(dict(errs[0], error=f"{len(errs)}/{len(rs)} seeds failed: "
+                                             f"{errs[0]['error']}"))
+            continue
+        m = dict(rs[0])
+        for k in ("rmse", "e_dot", "dtwd", "train_rmse", "objective"):
+            m[k] = float(np.mean([r[k] for r in rs]))
+        for k in ("seconds", "iterations"):
+            m[k] = float(np.median([r[k] for r in rs]))
+        m["iterations"] = int(m["iterations"])
+        m["certified"] = all(r["certified"] for r in rs)
+        bad = [r["status"] for r in rs
+               if r["status"] not in ("Solve_Succeeded", "Solved_To_Acceptable_Level")]
+        m["status"] = bad[0] if bad else rs[0]["status"]
+        if rs[0].get("chosen"):
+            picks = [r["chosen"] for r in rs]
+            m["chosen"] = "; ".join(f"{c} x{picks.count(c)}" for c in dict.fromkeys(picks))
+        out.append(m)
+    return out
 
 
 def _figures(shapes, K, seed, out):
@@ -145,6 +175,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("-K", type=lambda t: t if t == "published" else int(t), default=4,
                     help="components, or 'published' (the published runs' K per shape) [4]")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--repeats", type=int, default=1,
+                    help="seeds per shape (seed, seed + 1, ...); the figures are then means "
+                         "over them, as the published runs' (10 repetitions) [1]")
     ap.add_argument("--max-iter", type=int, default=1000)
     ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("--figures", action="store_true")
@@ -154,7 +187,9 @@ def main(argv: list[str] | None = None) -> int:
     if a.figures:
         _figures(a.shapes, a.K, a.seed, a.out)
         return 0
-    tasks = [(s, v, a.K, a.seed, a.max_iter) for v in a.variants for s in a.shapes]
+    seeds = range(a.seed, a.seed + a.repeats)
+    tasks = [(s, v, a.K, seed, a.max_iter) for v in a.variants for s in a.shapes
+             for seed in seeds]
     t0 = time.perf_counter()
     if a.workers > 1:
         # the project's executor: its workers sum on one thread each (SEDS_CASADI_THREADS=1),
@@ -167,7 +202,12 @@ def main(argv: list[str] | None = None) -> int:
     else:
         rows = [_one(t) for t in tasks]
     wall = time.perf_counter() - t0
-    print(f"ds-opt protocol, test demos, K = {a.K}, {len(a.shapes)} shapes, wall {wall:.0f} s")
+    n_fits = len(rows)
+    if a.repeats > 1:
+        rows = _mean_over_seeds(rows)
+    print(f"ds-opt protocol, test demos, K = {a.K}, {len(a.shapes)} shapes, wall {wall:.0f} s"
+          + (f", {a.repeats} seeds per shape ({n_fits} runs; figures are means over seeds, "
+             "as the published SEDS runs' 10 repetitions)" if a.repeats > 1 else ""))
     print(f"{'variant':<22} {'ok':>5} {'RMSE':>7} {'e_dot':>7} {'DTWD':>8} {'median s':>9} "
           f"{'iter':>6} {'unconv':>6} {'cert':>5}")
     for v in a.variants:
@@ -195,6 +235,17 @@ def main(argv: list[str] | None = None) -> int:
         if st == "test":
             print(f"  published {method} (26 shapes): RMSE {vals[0]:.2f}, e_dot {vals[1]:.3f}, "
                   f"DTWD {vals[2]:.0f}")
+    print("\nshapes above 1.5x the published SEDS figure on some metric (RMSE, e_dot, DTWD):")
+    for v in a.variants:
+        over = []
+        for r in rows:
+            if r["variant"] == v and "error" not in r:
+                bad = [n for n, x, p in zip(("RMSE", "e_dot", "DTWD"),
+                                            (r["rmse"], r["e_dot"], r["dtwd"]), r["pub"])
+                       if x > 1.5 * p]
+                if bad:
+                    over.append(f"{r['shape']} ({', '.join(bad)})")
+        print(f"  {v}: {len(over)}" + (f": {'; '.join(over)}" if over else ""))
     print("\nper shape (test): RMSE / e_dot / DTWD, J = the training objective reached (scaled "
           "units); published SEDS last")
     for s in a.shapes:

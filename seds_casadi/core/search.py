@@ -343,7 +343,7 @@ class DemoSearchCV(BaseEstimator):
                  "params"]
         for c in np.argsort(res["rank_test_score"]):
             note = f"  ({res['n_failed'][c]} folds failed)" if res["n_failed"][c] else ""
-            lines.append(f"{res['rank_test_score'][c]:>4} {res['mean_test_score'][c]:>8.3f} "
+            lines.append(f"{res['rank_test_score'][c]:>4} {res['mean_test_score'][c] + 0.0:>8.3f} "
                          f"{res['mean_rmse'][c]:>9.4g} {res['mean_e_dot'][c]:>7.3f} "
                          f"{res['mean_dtw'][c]:>9.4g} {res['mean_fit_time'][c]:>6.1f}  "
                          f"{res['params'][c]}{note}")
