@@ -1,6 +1,7 @@
 """Independent numpy implementations of the package's equations, used only as test oracles.
 
-The package defines each equation once, in CasADi; these re-implementations check it.
+The package defines each equation once, in CasADi; these re-implementations check it. Also
+:func:`linear_flow_demos`, demonstrations sampled from the exact flow of a linear system.
 """
 
 from __future__ import annotations
@@ -278,3 +279,23 @@ def face_orientation(direction):
     x = d / n if n > 1e-9 else np.array([1.0, 0, 0])
     z = np.array([0.0, 0.0, 1.0])
     return np.column_stack([x, np.cross(z, x), z])
+
+
+def linear_flow_demos(A: np.ndarray, n: int = 4, T: float = 6.0, dt: float = 0.02,
+                      seed: int = 0):
+    """Demonstrations of xdot = A x (target at the origin), from n random unit starts, sampled
+    every dt by the exact flow expm(A dt)."""
+    from scipy.linalg import expm
+
+    from seds_casadi import Demonstrations
+
+    rng = np.random.default_rng(seed)
+    M = expm(A * dt)
+    paths = []
+    for _ in range(n):
+        x = rng.uniform(-1, 1, A.shape[0])
+        traj = [x / np.linalg.norm(x)]
+        for _ in range(int(T / dt)):
+            traj.append(M @ traj[-1])
+        paths.append(np.array(traj))
+    return Demonstrations(paths, dt=dt, target=np.zeros(A.shape[0]))

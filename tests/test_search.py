@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from oracles import linear_flow_demos
 from sklearn.exceptions import NotFittedError
 
 from seds_casadi import SEDS, Demonstrations, StableDS
@@ -22,18 +23,7 @@ A_TRUE = np.array([[-1.0, 10.0], [0.0, -3.0]])
 
 
 def _linear_demos(A=A_TRUE, n=4, T=6.0, dt=0.02, seed=0) -> Demonstrations:
-    from scipy.linalg import expm
-
-    rng = np.random.default_rng(seed)
-    M = expm(A * dt)
-    paths = []
-    for _ in range(n):
-        x = rng.uniform(-1, 1, 2)
-        traj = [x / np.linalg.norm(x)]
-        for _ in range(int(T / dt)):
-            traj.append(M @ traj[-1])
-        paths.append(np.array(traj))
-    return Demonstrations(paths, dt=dt, target=np.zeros(2))
+    return linear_flow_demos(A, n=n, T=T, dt=dt, seed=seed)
 
 
 def _linear_model(A, d=2) -> StableDS:

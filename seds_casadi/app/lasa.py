@@ -59,8 +59,6 @@ from ..core.errors import ConvergenceWarning
 from ..core.metrics import (
     direction_error,
     dtw_distance,
-    pointwise_direction_error,
-    reproduction_dtw,
     velocity_rmse,
 )
 from ..core.model_selection import (  # noqa: F401 - re-exported
@@ -70,7 +68,7 @@ from ..core.model_selection import (  # noqa: F401 - re-exported
     dsopt_elbow_k,
 )
 from ..core.parametrization import OBJECTIVES
-from ..core.search import DemoSearchCV
+from ..core.search import DemoSearchCV, held_out_scores
 from ..core.seds import SEDS
 
 __all__ = ["LasaResult", "evaluate_shape", "run_lasa", "write_csv", "summary_table", "PROTOCOLS",
@@ -99,6 +97,10 @@ DSOPT_TRAIN_DEMOS = (1, 2, 3, 4)
 DSOPT_TEST_DEMOS = (5, 6, 7)
 DSOPT_SAMPLE_STEP = 2
 DSOPT_START_INDEX = 19
+#: the protocol's reproductions (``Simulation.m`` as ``evaluate_SEDS.m`` calls it): Euler at
+#: 0.01 s from the 20th point until every component is below 0.1 mm/s for 4 steps, 3,000 steps
+DSOPT_REPRODUCTION = {"dt": 0.01, "speed_tol": 0.1, "max_steps": 3000,
+                      "start_index": DSOPT_START_INDEX}
 
 #: Published means over the 26 shapes, (method, set) -> (RMSE [mm/s], e_dot, DTWD [mm]).
 #: SEDS: ``results/seds_stats_all.mat`` of nbfigueroa/ds-opt (means over shapes of the means over
@@ -288,19 +290,16 @@ def dsopt_scores(predict, data: DsOptSet) -> tuple[float, float, float, np.ndarr
     at dt = 0.01 from the set's starts until every |xdot| component is below 0.1 for 4 steps or
     3,000 steps), and the reproductions (steps, demos, d).
 
+    :func:`~seds_casadi.core.search.held_out_scores` with :data:`DSOPT_REPRODUCTION`.
+
     Parameters
     ----------
     predict : callable
         Velocity field, (n, d) positions -> (n, d) velocities (any model, e.g. a peer's).
     data : DsOptSet
     """
-    X, V = np.concatenate(data.positions), np.concatenate(data.velocities)
-    F = predict(X)
-    dtw, paths = reproduction_dtw(predict, data.starts, data.positions, return_paths=True,
-                                  dt=0.01, speed_tol=0.1, max_steps=3000, window=4)
-    return (velocity_rmse(F, V),
-            float(np.mean(pointwise_direction_error(F, V, min_norm_product=0.0))),
-            float(np.mean(dtw)), paths)
+    s = held_out_scores(predict, data.demonstrations(), return_paths=True, **DSOPT_REPRODUCTION)
+    return s["rmse"], s["e_dot"], s["dtw"], s["paths"]
 
 
 def evaluate_shape_dsopt(shape: str, objective: str = "mse", n_components: int | str = "bic",
@@ -351,8 +350,7 @@ def evaluate_shape_dsopt(shape: str, objective: str = "mse", n_components: int |
                        **(seds_options or {}))
         chosen = ""
         if param_grid:
-            search = DemoSearchCV(learner, param_grid, dt=0.01, speed_tol=0.1, max_steps=3000,
-                                  start_index=DSOPT_START_INDEX)
+            search = DemoSearchCV(learner, param_grid, **DSOPT_REPRODUCTION)
             model = search.fit(sets["train"].demonstrations()).model_
             chosen = ", ".join(f"{k}={v}" for k, v in search.best_params_.items())
         else:

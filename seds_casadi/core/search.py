@@ -87,13 +87,14 @@ def demo_folds(n_demos: int, cv="loo") -> list[tuple[list[int], list[int]]]:
 
 def held_out_scores(model, demos: Demonstrations, dt: float | None = None,
                     speed_tol: float | None = None, max_steps: int | None = None,
-                    start_index: int = 0) -> dict[str, float]:
+                    start_index: int = 0, return_paths: bool = False) -> dict:
     """RMSE, e_dot and DTW of a fitted model on demonstrations it has not seen.
 
     Parameters
     ----------
-    model : StableDS or SEDS
-        Anything with ``predict`` (caller's coordinates).
+    model : StableDS, SEDS or callable
+        Anything with ``predict``, or the velocity field itself, (n, d) -> (n, d), in the
+        caller's coordinates (e.g. a peer's model).
     demos : Demonstrations
         The held-out set (same target as the model).
     dt : float, optional
@@ -109,27 +110,35 @@ def held_out_scores(model, demos: Demonstrations, dt: float | None = None,
         The reproductions start at this sample of each demonstration (the LASA evaluation
         starts at the 20th, index 19).
 
+    return_paths : bool, default False
+        Also return the reproductions under ``"paths"``, shape (steps, demos, d).
+
     Returns
     -------
     dict
         ``rmse``, ``e_dot``, ``dtw`` (each the mean over the demonstrations) and ``steps``.
     """
+    predict = getattr(model, "predict", model)
     pos = [p + demos.target for p in demos.shifted_positions]
     X, V = np.concatenate(pos), np.concatenate(demos.velocities)
-    F = np.asarray(model.predict(X), dtype=float)
-    if dt is None:
-        dt = demos.estimated_dt()
+    F = np.asarray(predict(X), dtype=float)
+    if dt is None or max_steps is None:
+        data_dt = demos.estimated_dt()
+        dt = data_dt if dt is None else dt
+        if max_steps is None:
+            max_steps = int(np.ceil(3 * max(len(p) for p in pos) * data_dt / dt))
     if speed_tol is None:
         speed_tol = 1e-3 * float(np.max(np.abs(V)))
-    if max_steps is None:
-        max_steps = int(np.ceil(3 * max(len(p) for p in pos) * demos.estimated_dt() / dt))
     max_steps = max(int(max_steps), 5)
     starts = np.stack([p[min(int(start_index), len(p) - 1)] for p in pos])
-    dtw, paths = reproduction_dtw(model.predict, starts, pos, return_paths=True, dt=float(dt),
+    dtw, paths = reproduction_dtw(predict, starts, pos, return_paths=True, dt=float(dt),
                                   speed_tol=float(speed_tol), max_steps=max_steps, window=4)
-    return {"rmse": velocity_rmse(F, V),
-            "e_dot": float(np.mean(pointwise_direction_error(F, V, min_norm_product=0.0))),
-            "dtw": float(np.mean(dtw)), "steps": int(len(paths))}
+    out = {"rmse": velocity_rmse(F, V),
+           "e_dot": float(np.mean(pointwise_direction_error(F, V, min_norm_product=0.0))),
+           "dtw": float(np.mean(dtw)), "steps": int(len(paths))}
+    if return_paths:
+        out["paths"] = paths
+    return out
 
 
 class DemoSearchCV(BaseEstimator):
