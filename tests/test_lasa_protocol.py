@@ -7,6 +7,8 @@ import sys
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from seds_casadi.app.lasa import (
     DSOPT_COLUMNS,
@@ -103,6 +105,25 @@ def test_the_stop_rule_of_the_reproductions_on_a_linear_system():
         simulate_until_slow(field, np.ones((1, 1)), max_steps=4)
     with pytest.raises(ValueError, match="dt"):
         simulate_until_slow(field, np.ones((1, 1)), dt=0.0)
+
+
+@settings(max_examples=40, deadline=None)
+@given(rate=st.floats(0.1, 80.0), n=st.integers(1, 50), x0=st.floats(-5.0, 5.0))
+def test_substeps_are_euler_at_the_finer_step_sampled_at_the_coarse_one(rate, n, x0):
+    # xdot = -rate x: each recorded step is n Euler steps of dt / n, x_k = (1 - rate dt / n)^(n k)
+    dt = 0.05
+    path = simulate_until_slow(lambda x: -rate * x, np.array([[x0]]), dt=dt, speed_tol=1e-3,
+                               max_steps=40, substeps=n)[:, 0, 0]
+    k = np.arange(len(path))
+    np.testing.assert_allclose(path, x0 * (1 - rate * dt / n) ** (n * k), rtol=1e-9, atol=1e-12)
+    if n == 1:
+        np.testing.assert_array_equal(path, simulate_until_slow(
+            lambda x: -rate * x, np.array([[x0]]), dt=dt, speed_tol=1e-3, max_steps=40)[:, 0, 0])
+
+
+def test_bad_substeps_are_refused():
+    with pytest.raises(ValueError, match="substeps"):
+        simulate_until_slow(lambda x: -x, np.ones((1, 1)), substeps=0)
 
 
 def test_reproduction_dtw_compares_each_reproduction_with_its_whole_reference():

@@ -99,6 +99,24 @@ def test_held_out_scores_of_an_exact_and_a_doubled_model():
     assert exact["steps"] >= 5
 
 
+def test_a_stiff_model_on_coarse_data_is_judged_on_its_motion_not_on_eulers_overshoot():
+    # rates 60 and 40 /s sampled at 20 Hz: explicit Euler at the data's step multiplies the error
+    # by |1 - 60 * 0.05| = 2 per step and diverges; the exact model must still score as exact
+    A = np.diag([-60.0, -40.0])
+    demos = _linear_demos(A=A, n=3, T=0.5, dt=0.05)
+    model = _linear_model(A)
+    auto = held_out_scores(model, demos)
+    assert auto["substeps"] == 6  # ceil(0.05 * 60 / 0.5)
+    literal = held_out_scores(model, demos, substeps=1)
+    assert literal["substeps"] == 1
+    assert not np.isfinite(literal["dtw"]) or literal["dtw"] > 1e3
+    # the reproduction at dt / 6 lags the exact flow by a little: a DTW far below the extent
+    assert auto["dtw"] < 0.5
+    assert auto["rmse"] == literal["rmse"] and auto["e_dot"] == literal["e_dot"]
+    # a plain callable has no stiffness: the data's step, literally
+    assert held_out_scores(model.predict, demos)["substeps"] == 1
+
+
 # ------------------------------------------------------------------ the search
 @pytest.fixture(scope="module")
 def lyapunov_search():

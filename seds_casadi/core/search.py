@@ -87,7 +87,8 @@ def demo_folds(n_demos: int, cv="loo") -> list[tuple[list[int], list[int]]]:
 
 def held_out_scores(model, demos: Demonstrations, dt: float | None = None,
                     speed_tol: float | None = None, max_steps: int | None = None,
-                    start_index: int = 0, return_paths: bool = False) -> dict:
+                    start_index: int = 0, return_paths: bool = False,
+                    substeps: int | None = None) -> dict:
     """RMSE, e_dot and DTW of a fitted model on demonstrations it has not seen.
 
     Parameters
@@ -112,11 +113,20 @@ def held_out_scores(model, demos: Demonstrations, dt: float | None = None,
 
     return_paths : bool, default False
         Also return the reproductions under ``"paths"``, shape (steps, demos, d).
+    substeps : int, optional
+        Euler sub-steps per step of ``dt`` (:func:`~seds_casadi.core.metrics.simulate_until_slow`).
+        Default: 1 for a plain callable; for a model with ``stiffness()`` (a :class:`StableDS`
+        or a fitted :class:`SEDS`) enough that each sub-step is at most 0.5 / stiffness (at most
+        1,000), so that a stiff candidate is judged on its motion, not on Euler's overshoot at a
+        coarse data rate (explicit Euler diverges for dt * stiffness > 2). The reproduction is
+        still sampled every ``dt``, so candidates are compared on the same DTW. Pass 1 to
+        reproduce a published protocol literally (the ds-opt LASA evaluation does).
 
     Returns
     -------
     dict
-        ``rmse``, ``e_dot``, ``dtw`` (each the mean over the demonstrations) and ``steps``.
+        ``rmse``, ``e_dot``, ``dtw`` (each the mean over the demonstrations), ``steps`` and
+        ``substeps``.
     """
     predict = getattr(model, "predict", model)
     pos = [p + demos.target for p in demos.shifted_positions]
@@ -130,12 +140,15 @@ def held_out_scores(model, demos: Demonstrations, dt: float | None = None,
     if speed_tol is None:
         speed_tol = 1e-3 * float(np.max(np.abs(V)))
     max_steps = max(int(max_steps), 5)
+    if substeps is None:
+        substeps = _auto_substeps(model, float(dt))
     starts = np.stack([p[min(int(start_index), len(p) - 1)] for p in pos])
     dtw, paths = reproduction_dtw(predict, starts, pos, return_paths=True, dt=float(dt),
-                                  speed_tol=float(speed_tol), max_steps=max_steps, window=4)
+                                  speed_tol=float(speed_tol), max_steps=max_steps, window=4,
+                                  substeps=int(substeps))
     out = {"rmse": velocity_rmse(F, V),
            "e_dot": float(np.mean(pointwise_direction_error(F, V, min_norm_product=0.0))),
-           "dtw": float(np.mean(dtw)), "steps": int(len(paths))}
+           "dtw": float(np.mean(dtw)), "steps": int(len(paths)), "substeps": int(substeps)}
     if return_paths:
         out["paths"] = paths
     return out
@@ -164,8 +177,9 @@ class DemoSearchCV(BaseEstimator):
         Folds of demonstrations (:func:`demo_folds`).
     refit : bool, default True
         Fit the best candidate on all demonstrations (``best_estimator_``, ``model_``).
-    dt, speed_tol, max_steps, start_index
-        The held-out reproductions' settings (:func:`held_out_scores`).
+    dt, speed_tol, max_steps, start_index, substeps
+        The held-out reproductions' settings (:func:`held_out_scores`; by default the data's
+        step, with Euler sub-steps for stiff candidates).
     verbose : int, default 0
         1: a progress line per fit (logger ``seds_casadi.core.search``, INFO).
 
@@ -187,7 +201,8 @@ class DemoSearchCV(BaseEstimator):
 
     def __init__(self, estimator=None, param_grid=None, scoring="reproduction", cv="loo",
                  refit: bool = True, dt: float | None = None, speed_tol: float | None = None,
-                 max_steps: int | None = None, start_index: int = 0, verbose: int = 0) -> None:
+                 max_steps: int | None = None, start_index: int = 0, verbose: int = 0,
+                 substeps: int | None = None) -> None:
         self.estimator = estimator
         self.param_grid = param_grid
         self.scoring = scoring
@@ -198,6 +213,7 @@ class DemoSearchCV(BaseEstimator):
         self.max_steps = max_steps
         self.start_index = start_index
         self.verbose = verbose
+        self.substeps = substeps
 
     # ------------------------------------------------------------------ fitting
     def _candidates(self) -> list[dict]:
@@ -263,7 +279,7 @@ class DemoSearchCV(BaseEstimator):
                 seconds[c, f] = time.perf_counter() - t0
                 held = X.select(test)
                 s = held_out_scores(est.model_, held, self.dt, self.speed_tol, self.max_steps,
-                                    self.start_index)
+                                    self.start_index, substeps=self.substeps)
                 for m in METRICS:
                     metrics[m][c, f] = s[m]
                 if callable(self.scoring):
@@ -357,6 +373,18 @@ class DemoSearchCV(BaseEstimator):
                          f"{res['mean_dtw'][c]:>9.4g} {res['mean_fit_time'][c]:>6.1f}  "
                          f"{res['params'][c]}{note}")
         return "\n".join(lines)
+
+
+def _auto_substeps(model, dt: float, max_substeps: int = 1000) -> int:
+    """Euler sub-steps that keep dt / n * stiffness <= 0.5 (1 without a stiffness)."""
+    model = getattr(model, "model_", model)  # a fitted SEDS holds its StableDS
+    stiffness = getattr(model, "stiffness", None)
+    if not callable(stiffness):
+        return 1
+    rate = float(stiffness())
+    if not np.isfinite(rate) or rate <= 0:
+        return 1
+    return int(min(max_substeps, max(1, np.ceil(dt * rate / 0.5))))
 
 
 def _finite(v) -> float | None:
