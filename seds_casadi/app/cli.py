@@ -100,9 +100,13 @@ def _add_fit(sub, quiet) -> None:
                    help="bound the stiffness of the components (units of the data's rate; "
                         "10 suited the LASA shapes, but it can also hold a fit back: "
                         "compare with and without) [none]")
-    f.add_argument("--init", choices=("joint-em", "lpv"), default="joint-em",
-                   help="IPOPT's start: EM on [x; xdot] (SEDS) or LPV-DS's (EM on x, "
-                        "least-squares stable gains) [joint-em]")
+    f.add_argument("--init", choices=("joint-em", "lpv", "pc"), default="joint-em",
+                   help="IPOPT's start: EM on [x; xdot] (SEDS), LPV-DS's (EM on x, "
+                        "least-squares stable gains) or the same from a physically-consistent "
+                        "clustering (PC-GMM's similarity) [joint-em]")
+    f.add_argument("--gmm", choices=("joint", "fixed"), default="joint",
+                   help="optimise the GMM with the dynamics (SEDS) or keep the start's GMM and "
+                        "optimise the dynamics only (LPV-DS's split; with --init pc) [joint]")
     f.add_argument("--speed", choices=("strength", "median", "least-squares"),
                    default="strength",
                    help="how a direction-objective model gets the demonstrated speeds: a "
@@ -283,7 +287,8 @@ def _cmd_fit(a) -> int:
     print(f"loaded {demos}")
     learner = SEDS(a.components, objective=a.objective, random_state=a.seed,
                    max_iter=a.max_iter, lyapunov=a.lyapunov, formulation=a.formulation,
-                   gain_limit=a.gain_limit, init=a.init, speed_calibration=a.speed)
+                   gain_limit=a.gain_limit, init=a.init, gmm=a.gmm,
+                   speed_calibration=a.speed)
     if a.choose:
         from ..core.search import DemoSearchCV
 

@@ -8,6 +8,7 @@ stable set, the Eq. 11 weights, and the per-sample objective kernels with exact 
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 
 import casadi as ca
@@ -199,7 +200,59 @@ def _speed_factor(A, h, X, Xd, how: str = "median") -> float:
 
 
 #: initialisations of the learner (see :func:`_initial_theta`)
-INITS = ("joint-em", "lpv")
+INITS = ("joint-em", "lpv", "pc")
+#: what IPOPT optimises: the GMM and the dynamics together (SEDS), or the dynamics only
+GMMS = ("joint", "fixed")
+#: the physically-consistent similarity is built on at most this many samples (evenly strided);
+#: the others take the resulting GMM's posterior
+PC_MAX_SAMPLES = 2000
+
+
+def pc_similarity(X: np.ndarray, Xd: np.ndarray) -> np.ndarray:
+    """The physically-consistent similarity of PC-GMM (Figueroa and Billard, CoRL 2018; as in
+    their phys-gmm code): s_ij = exp(-l |x_i - x_j|) (1 + cos angle(xdot_i, xdot_j)), with
+    l = 1 / (2 sigma^2) and sigma^2 half the mode of the pairwise distances' histogram. Two
+    samples are similar when they are close *and* move the same way, so that a cluster follows
+    one locally linear piece of the motion. A zero velocity counts as cos = 0."""
+    from scipy.spatial.distance import pdist, squareform
+
+    D = pdist(X)
+    counts, edges = np.histogram(D, bins="auto")
+    mode = 0.5 * (edges[np.argmax(counts)] + edges[np.argmax(counts) + 1])
+    sigma2 = max(mode, 1e-6 * max(float(D.max(initial=0.0)), 1e-300)) / 2.0
+    speed = np.linalg.norm(Xd, axis=1)
+    U = np.divide(Xd, speed[:, None], out=np.zeros_like(Xd), where=speed[:, None] > 0)
+    return np.exp(-squareform(D) / (2.0 * sigma2)) * (1.0 + U @ U.T)
+
+
+def _pc_gmm(X: np.ndarray, Xd: np.ndarray, K: int, random_state, reg: float):
+    """Weights, means and covariances of K Gaussians on the positions, from a spectral
+    clustering of :func:`pc_similarity` into K clusters.
+
+    PC-GMM itself samples a distance-dependent Chinese restaurant process whose prior is this
+    similarity and so also chooses K; here K is the learner's ``n_components`` and the clusters
+    come from the similarity's spectral embedding (our choice: deterministic given the seed,
+    seconds on 2,000 samples, and the same notion of a physically-consistent cluster)."""
+    from sklearn.cluster import SpectralClustering
+
+    stride = max(1, int(np.ceil(len(X) / PC_MAX_SAMPLES)))
+    Xs, Xds = X[::stride], Xd[::stride]
+    with warnings.catch_warnings():  # a graph in several pieces is several clusters: fine here
+        warnings.filterwarnings("ignore", message="Graph is not fully connected")
+        labels = SpectralClustering(n_clusters=K, affinity="precomputed", assign_labels="kmeans",
+                                    random_state=sklearn_random_state(random_state)
+                                    ).fit_predict(pc_similarity(Xs, Xds))
+    d = X.shape[1]
+    weights, means, covs = np.zeros(K), np.zeros((K, d)), np.zeros((K, d, d))
+    for k in range(K):
+        pts = Xs[labels == k]
+        if len(pts) == 0:  # spectral clustering gave fewer clusters: a broad spare component
+            pts = Xs
+        weights[k] = max(len(pts), 1)
+        means[k] = pts.mean(axis=0)
+        covs[k] = (np.cov(pts.T, bias=True).reshape(d, d) if len(pts) > 1 else np.zeros((d, d)))
+        covs[k] += reg * np.eye(d)
+    return weights / weights.sum(), means, covs
 
 
 def _stable_gains_lpv(gamma: np.ndarray, X: np.ndarray, Xd: np.ndarray, P0: np.ndarray,
@@ -333,16 +386,31 @@ def _initial_theta(
     gmr = [_project_stable(np.linalg.solve(Sx[k] + 1e-6 * np.eye(d),
                                            gm.covariances_[k, :d, d:]).T, P0, margin)
            for k in range(K)]  # Sigma_xdotx Sigma_x^-1, projected
-    if init != "lpv":
+    if init not in ("lpv", "pc"):
         resp = gm.predict_proba(joint) if layout.with_noise else None
         return _pack_theta(layout, P0, margin, gm.weights_, gm.means_[:, :d], Sx, gmr, X, Xd,
                            resp)
-    gx = _em(X, K, d, random_state)
-    gamma = gx.predict_proba(X)
-    nearest = [int(np.argmin(np.sum((gm.means_[:, :d] - m) ** 2, axis=1))) for m in gx.means_]
+    if init == "pc":
+        weights, means, covs = _pc_gmm(X, Xd, K, random_state,
+                                       INIT_REG_COVAR if d <= 3 else INIT_REG_COVAR_HIGH_D)
+    else:
+        gx = _em(X, K, d, random_state)
+        weights, means, covs = gx.weights_, gx.means_, gx.covariances_
+    gamma = _posterior(X, weights, means, covs)
+    nearest = [int(np.argmin(np.sum((gm.means_[:, :d] - m) ** 2, axis=1))) for m in means]
     gains = _stable_gains_lpv(gamma, X, Xd, P0, margin, [gmr[j] for j in nearest])
-    return _pack_theta(layout, P0, margin, gx.weights_, gx.means_, gx.covariances_, gains, X,
-                       Xd, gamma)
+    return _pack_theta(layout, P0, margin, weights, means, covs, gains, X, Xd, gamma)
+
+
+def _posterior(X: np.ndarray, weights, means, covs) -> np.ndarray:
+    """The mixing gamma_k(x) of a GMM on the positions, (n, K), computed in log space."""
+    from scipy.stats import multivariate_normal
+
+    logp = np.stack([np.log(max(w, 1e-300)) + multivariate_normal(m, c, allow_singular=True)
+                     .logpdf(X).reshape(len(X)) for w, m, c in zip(weights, means, covs)], axis=1)
+    logp -= logp.max(axis=1, keepdims=True)
+    p = np.exp(logp)
+    return p / p.sum(axis=1, keepdims=True)
 
 
 def build_problem(demos: Demonstrations, n_components: int, objective: str,
@@ -350,7 +418,8 @@ def build_problem(demos: Demonstrations, n_components: int, objective: str,
                   stability_margin: float = 1e-3, random_state=None,
                   compile: bool = True, hessian: str = "auto", lyapunov: str = "identity",
                   formulation: str = "by-construction",
-                  gain_limit: float | None = None, init: str = "joint-em") -> SEDSProblem:
+                  gain_limit: float | None = None, init: str = "joint-em",
+                  gmm: str = "joint") -> SEDSProblem:
     """Scale the data, initialise by k-means + EM and build the CasADi problem.
 
     Parameters are those of :class:`~seds_casadi.core.seds.SEDS` (already validated). With
@@ -387,6 +456,9 @@ def build_problem(demos: Demonstrations, n_components: int, objective: str,
     theta0 = _initial_theta(layout, Xs, Xds, stability_margin, random_state, P0, init)
     lbx, ubx = _bounds(layout, gain_limit)
     theta0 = np.clip(theta0, lbx + 1e-9, ubx - 1e-9)
+    if gmm == "fixed":  # IPOPT takes x_i with lbx_i = ubx_i as a parameter of the problem
+        idx = gmm_indices(layout)
+        lbx[idx] = ubx[idx] = theta0[idx]
     if objective == "direction":  # Eq. 9: w_i cos = (w_i / |xdot_i|) xdot_i . f / |f|
         speed = np.linalg.norm(Xds, axis=1)
         moving = speed > 0
@@ -474,6 +546,21 @@ def check_approach(demos: Demonstrations, X: np.ndarray, Xd: np.ndarray) -> None
         warnings.warn("; ".join(problems) + f" (target {demos.target}); the model will still "
                       "converge to the target. Check the target (by default the mean end point) "
                       "or trim the demonstrations.", ConvergenceWarning, stacklevel=4)
+
+
+def gmm_indices(layout: Layout) -> np.ndarray:
+    """Indices in theta of the GMM over the positions: the priors (logits, or the raw priors
+    of the constrained form), the means mu_k and the Cholesky factors of Sigma_x,k; with
+    ``gmm="fixed"`` they keep their initial values and only the dynamics (A_k through B_k and
+    W_k, or A_k and the velocity means of the constrained form; L_P; the noise of the
+    likelihood objective) are optimised."""
+    idx = list(range(layout.n_logits))
+    for k in range(layout.K):
+        s = layout.slices(k)
+        for name in ("pi", "mu", "L"):
+            if name in s:
+                idx += range(s[name].start, s[name].stop)
+    return np.array(sorted(idx), dtype=int)
 
 
 def _bounds(layout: Layout, gain_limit: float | None = None) -> tuple[np.ndarray, np.ndarray]:

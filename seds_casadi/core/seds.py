@@ -26,6 +26,7 @@ from .model_selection import bic_n_components
 from .objectives import approach_constraints
 from .parametrization import FORMULATIONS, LYAPUNOV, OBJECTIVES, stability_constraints
 from .problem import (
+    GMMS,
     HESSIANS,
     INITS,
     SPEED_CALIBRATIONS,
@@ -204,7 +205,7 @@ class SEDS(RegressorMixin, BaseEstimator):
         the data's step cannot follow (on LASA, forward Euler at 0.01 s diverged from a rate of
         540/s). None: unbounded, as SEDS (measured in ``benchmarks/README.md``). The value
         is data-dependent: 10 suited LASA, but a bound can also keep IPOPT from the better fit.
-    init : {"joint-em", "lpv"}, default "joint-em"
+    init : {"joint-em", "lpv", "pc"}, default "joint-em"
         IPOPT's starting point. ``"joint-em"`` (SEDS's): k-means + EM on [x; xdot], each
         component's regression gain projected onto the stable set. ``"lpv"`` (LPV-DS's, Figueroa
         and Billard 2018, first two steps): EM on the positions alone, then the gains of least
@@ -212,6 +213,20 @@ class SEDS(RegressorMixin, BaseEstimator):
         whose size does not depend on the number of samples); the joint problem then improves on
         it. The problem is non-convex, so the start decides which optimum is reached; which one
         is better depends on the data (compared on LASA in ``benchmarks/README.md``).
+        ``"pc"``: as ``"lpv"``, with the GMM on the positions from a *physically-consistent*
+        clustering (PC-GMM's similarity, Figueroa and Billard 2018: samples are alike when they
+        are close and move the same way; :func:`~seds_casadi.core.problem.pc_similarity`),
+        cut into ``n_components`` clusters by spectral clustering; each cluster then follows
+        one locally linear piece of the motion. PC-GMM samples a Dirichlet-process mixture and
+        so also chooses K; here K stays the learner's (choose it with :class:`DemoSearchCV`).
+    gmm : {"joint", "fixed"}, default "joint"
+        ``"joint"`` (SEDS, Eq. 10): IPOPT optimises the GMM and the dynamics together.
+        ``"fixed"``: the priors, means and position covariances keep the values of ``init``
+        and IPOPT optimises the dynamics (the A_k and, with ``lyapunov="learned"``, P) under
+        that fixed mixing, as LPV-DS does after its clustering; the model is certified the
+        same way. With ``init="pc"`` this is what generalised best on LASA's held-out demos
+        (``benchmarks/README.md``): optimising the GMM too fits the training demos closer and
+        moves the components off the pieces of the motion they stood for.
     solver_options : dict or None, default None
         Extra IPOPT options, by IPOPT's names (``{"mu_strategy": "adaptive"}``; the ``ipopt.``
         prefix is added), over the learner's own (``_ipopt_options``). Every model is certified
@@ -245,6 +260,7 @@ class SEDS(RegressorMixin, BaseEstimator):
         strength_components: int | None = None,
         gain_limit: float | None = None,
         init: str = "joint-em",
+        gmm: str = "joint",
         solver_options: dict | None = None,
         verbose: bool = False,
     ) -> None:
@@ -270,6 +286,7 @@ class SEDS(RegressorMixin, BaseEstimator):
         self.strength_components = strength_components
         self.gain_limit = gain_limit
         self.init = init
+        self.gmm = gmm
         self.solver_options = solver_options
         self.verbose = verbose
 
@@ -286,6 +303,9 @@ class SEDS(RegressorMixin, BaseEstimator):
             raise ValueError(f"unknown objective {self.objective!r}; valid: {', '.join(OBJECTIVES)}")
         if self.init not in INITS:
             raise ValueError(f"unknown init {self.init!r}; valid: {', '.join(INITS)}")
+        if self.gmm not in GMMS:
+            raise ValueError(f"unknown gmm {self.gmm!r}; valid: {', '.join(GMMS)} ('fixed' "
+                             "keeps the initial GMM and optimises the dynamics only)")
         if self.lyapunov not in LYAPUNOV:
             raise ValueError(f"unknown lyapunov {self.lyapunov!r}; valid: {', '.join(LYAPUNOV)}")
         if self.formulation not in FORMULATIONS:
@@ -358,7 +378,7 @@ class SEDS(RegressorMixin, BaseEstimator):
         return build_problem(demos, K, self.objective, self.omega_lower,
                              self.omega_upper, self.stability_margin, self.random_state,
                              self.compile, self.hessian, self.lyapunov, self.formulation,
-                             self.gain_limit, self.init)
+                             self.gain_limit, self.init, self.gmm)
 
     def fit(self, X, y=None, target=None) -> SEDS:
         """Learn a certified globally stable DS from demonstrations.
@@ -548,7 +568,7 @@ class SEDS(RegressorMixin, BaseEstimator):
         info = {
             "status": status, "success": converged,
             "lyapunov": prob.layout.lyapunov, "formulation": prob.layout.formulation,
-            "init": self.init,
+            "init": self.init, "gmm": self.gmm,
             "constraint_violation": viol,
             "iterations": int(stats.get("iter_count", -1)), "objective": J,
             "objective_initial": prob.kernels.value(prob.theta0),

@@ -1,0 +1,119 @@
+"""SEDS(init="pc", gmm="fixed"): the physically-consistent clustering and the fixed-GMM fit.
+
+The similarity against a per-pair loop written from the PC-GMM paper's definition; a known
+answer where only the velocity directions separate two clusters; a fixed-GMM fit keeps its
+initial GMM exactly, optimises the dynamics, and is certified.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from seds_casadi import SEDS, Demonstrations
+from seds_casadi.core.problem import _pc_gmm, gmm_indices, pc_similarity
+
+
+def _similarity_loop(X, Xd):
+    """s_ij = exp(-l |x_i - x_j|) (1 + cos), l = 1 / (2 sigma^2), sigma^2 = mode / 2, pair by
+    pair (the histogram's mode is the centre of its fullest bin, numpy's 'auto' bins)."""
+    n = len(X)
+    dists = [float(np.sqrt(np.sum((X[i] - X[j]) ** 2))) for i in range(n) for j in range(i + 1, n)]
+    counts, edges = np.histogram(dists, bins="auto")
+    b = int(np.argmax(counts))
+    l_inv = 2.0 * max((edges[b] + edges[b + 1]) / 2, 1e-6 * max(dists)) / 2.0
+    S = np.zeros((n, n))
+    for i in range(n):
+        for j in range(n):
+            ni, nj = np.linalg.norm(Xd[i]), np.linalg.norm(Xd[j])
+            cos = 0.0 if ni == 0 or nj == 0 else float(Xd[i] @ Xd[j]) / (ni * nj)
+            S[i, j] = np.exp(-np.linalg.norm(X[i] - X[j]) / l_inv) * (1.0 + cos)
+    return S
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 10_000), n=st.integers(3, 25), d=st.integers(2, 4))
+def test_similarity_matches_the_pairwise_definition(seed, n, d):
+    rng = np.random.default_rng(seed)
+    X, Xd = rng.normal(size=(n, d)), rng.normal(size=(n, d))
+    Xd[0] = 0.0  # a sample at rest: cos = 0 with every other
+    S = pc_similarity(X, Xd)
+    np.testing.assert_allclose(S, _similarity_loop(X, Xd), rtol=1e-10, atol=1e-14)
+    np.testing.assert_allclose(S, S.T, rtol=0, atol=0)
+    assert np.all(S >= 0) and np.all(S <= 2 + 1e-12)
+    np.testing.assert_allclose(np.diag(S)[1:], 2.0, rtol=1e-12)  # itself: same place, cos 1
+
+
+def test_clusters_follow_the_direction_where_positions_alone_cannot():
+    # two long parallel lanes 0.02 apart, travelled in opposite directions: by position alone
+    # the best split of two is across the lanes' length; by the physically-consistent
+    # similarity each lane is one cluster (opposite velocities have similarity 0)
+    x = np.linspace(-1, 1, 200)
+    X = np.r_[np.c_[x, np.zeros_like(x)], np.c_[x, np.full_like(x, 0.02)]]
+    Xd = np.r_[np.tile([1.0, 0.0], (200, 1)), np.tile([-1.0, 0.0], (200, 1))]
+    w, mu, cov = _pc_gmm(X, Xd, 2, random_state=0, reg=1e-9)
+    lanes = sorted(mu[:, 1])
+    assert lanes == pytest.approx([0.0, 0.02], abs=1e-9)
+    np.testing.assert_allclose(w, 0.5, atol=1e-12)
+    assert np.all(cov[:, 1, 1] < 1e-8)  # no cluster straddles the lanes
+    from sklearn.mixture import GaussianMixture
+
+    em = GaussianMixture(2, random_state=0).fit(X)
+    assert np.ptp(em.means_[:, 0]) > 0.5  # EM on positions cuts across the lanes instead
+
+
+def _spiral_demos():
+    t = np.linspace(0, 1, 200)
+    demos = []
+    for phi in (0.0, 0.5, 1.0):
+        r = np.exp(-3 * t)
+        a = phi + 4 * t
+        demos.append(np.column_stack([r * np.cos(a), r * np.sin(a)]) * 100)
+    return Demonstrations([p - p[-1] for p in demos], dt=t[1])
+
+
+@pytest.mark.parametrize("lyapunov", ["identity", "learned"])
+def test_fixed_gmm_keeps_the_initial_gmm_and_fits_a_certified_model(lyapunov):
+    demos = _spiral_demos()
+    learner = SEDS(3, objective="mse", random_state=0, lyapunov=lyapunov, init="pc",
+                   gmm="fixed", max_iter=300)
+    prob = learner.build_problem(demos)
+    idx = gmm_indices(prob.layout)
+    np.testing.assert_array_equal(prob.lbx[idx], prob.theta0[idx])
+    np.testing.assert_array_equal(prob.ubx[idx], prob.theta0[idx])
+    priors0, means0, covs0 = prob.to_model_arrays(prob.theta0)
+    model = learner.fit(demos).model_
+    assert model.fit_info["gmm"] == "fixed" and model.fit_info["init"] == "pc"
+    c = model.certificate
+    assert c["max_eig_lyapunov"] < 0 and c["min_eig_cov"] > 0
+    d = 2
+    np.testing.assert_allclose(model.priors, priors0, rtol=1e-9)
+    np.testing.assert_allclose(model.means[:, :d], means0[:, :d], rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(model.covariances[:, :d, :d], covs0[:, :d, :d], rtol=1e-9)
+    # the start's gains are already the least-squares stable gains for the initial P under
+    # this mixing (so, for mse and P = I, the optimum): IPOPT may not make it worse
+    assert model.fit_info["objective"] <= model.fit_info["objective_initial"] * (1 + 1e-9)
+    # and the model reproduces the spiral's direction
+    X, Xd = np.concatenate(demos.positions), np.concatenate(demos.velocities)
+    moving = (np.linalg.norm(Xd, axis=1) > 1e-9) & (np.linalg.norm(X, axis=1) > 1e-9)
+    X, Xd = X[moving], Xd[moving]
+    F = model.predict(X)
+    cos = np.sum(F * Xd, 1) / np.linalg.norm(F, axis=1) / np.linalg.norm(Xd, axis=1)
+    assert np.median(cos) > 0.95
+
+
+def test_joint_gmm_moves_the_gmm():
+    demos = _spiral_demos()
+    learner = SEDS(3, objective="mse", random_state=0, init="pc", max_iter=300)
+    prob = learner.build_problem(demos)
+    assert np.all(prob.lbx[gmm_indices(prob.layout)] < prob.ubx[gmm_indices(prob.layout)])
+    _, means0, _ = prob.to_model_arrays(prob.theta0)
+    model = learner.fit(demos).model_
+    assert np.abs(model.means[:, :2] - means0[:, :2]).max() > 1e-3
+
+
+def test_unknown_gmm_is_refused():
+    with pytest.raises(ValueError, match="unknown gmm 'frozen'.*joint, fixed"):
+        SEDS(2, gmm="frozen").fit(_spiral_demos())
