@@ -46,6 +46,14 @@ VARIANTS = {
     "learned-direction": {"objective": "direction", "lyapunov": "learned"},
     "learned-g10-direction": {"objective": "direction", "lyapunov": "learned",
                               "gain_limit": 10.0},
+    # PC-GMM's physically-consistent clustering, the GMM then fixed (LPV-DS's split) or free
+    "pc-fixed": {"init": "pc", "gmm": "fixed"},
+    "learned-g10-pc-fixed": {"lyapunov": "learned", "gain_limit": 10.0, "init": "pc",
+                             "gmm": "fixed"},
+    "learned-g10-pc-joint": {"lyapunov": "learned", "gain_limit": 10.0, "init": "pc"},
+    # ... with K chosen on the training demos (leave one demonstration out)
+    "cv-k-learned-g10-pc-fixed": {"lyapunov": "learned", "gain_limit": 10.0, "init": "pc",
+                                  "gmm": "fixed", "param_grid": {"n_components": [4, 5, 6, 7, 8]}},
     # DemoSearchCV on the training demos (leave one out) chooses the objective, then refits
     "cv-learned-g10": {"lyapunov": "learned", "gain_limit": 10.0,
                        "param_grid": {"objective": ["mse", "direction"]}},

@@ -205,7 +205,7 @@ INITS = ("joint-em", "lpv", "pc")
 GMMS = ("joint", "fixed")
 #: the physically-consistent similarity is built on at most this many samples (evenly strided);
 #: the others take the resulting GMM's posterior
-PC_MAX_SAMPLES = 2000
+PC_MAX_SAMPLES = 1000
 
 
 def pc_similarity(X: np.ndarray, Xd: np.ndarray) -> np.ndarray:
