@@ -117,3 +117,27 @@ def test_joint_gmm_moves_the_gmm():
 def test_unknown_gmm_is_refused():
     with pytest.raises(ValueError, match="unknown gmm 'frozen'.*joint, fixed"):
         SEDS(2, gmm="frozen").fit(_spiral_demos())
+
+
+@pytest.mark.parametrize("lyapunov", ["identity", "learned"])
+def test_fixed_gmm_mse_statistics_equal_the_sum_over_samples(lyapunov):
+    # two implementations of the same J: the (K d)-square statistics (GramKernels) and the
+    # per-sample C sums (SumKernels), at random dynamics with the GMM at its fixed values
+    from seds_casadi.core.objectives import GramKernels, SumKernels
+
+    demos = _spiral_demos()
+    prob = SEDS(3, objective="mse", random_state=0, lyapunov=lyapunov, init="pc",
+                gmm="fixed").build_problem(demos)
+    assert isinstance(prob.kernels, GramKernels) and prob.hessian == "exact"
+    ref = SumKernels(prob.layout, "mse", prob.margin, prob.X, prob.Xd, np.ones(len(prob.X)),
+                     float(len(prob.X)))
+    rng = np.random.default_rng(1)
+    free = np.setdiff1d(np.arange(prob.layout.size), gmm_indices(prob.layout))
+    for _ in range(3):
+        theta = prob.theta0.copy()
+        theta[free] += rng.normal(scale=0.3, size=len(free))
+        assert prob.kernels.value(theta) == pytest.approx(ref.value(theta), rel=1e-10)
+        np.testing.assert_allclose(prob.kernels.gradient(theta)[free], ref.gradient(theta)[free],
+                                   rtol=1e-8, atol=1e-10)
+        np.testing.assert_allclose(prob.kernels.hessian(theta)[np.ix_(free, free)],
+                                   ref.hessian(theta)[np.ix_(free, free)], rtol=1e-7, atol=1e-9)

@@ -112,6 +112,9 @@ class ColumnSum:
     threads : int
         Split the columns over this many threads (ctypes releases the GIL) when each gets at
         least 256.
+    source : str, optional
+        ``column_sum_source(f, name)`` when the caller already has it (the translation takes
+        tens of milliseconds for a Hessian kernel); it is kept as ``self.source``.
 
     Raises
     ------
@@ -124,8 +127,9 @@ class ColumnSum:
     FLAGS = ("-O3", "-march=native", "-fopenmp-simd", "-fno-math-errno", "-fno-trapping-math")
 
     def __init__(self, f: ca.Function, U: np.ndarray, pad_row: int, name: str = "column_sum",
-                 threads: int = 1) -> None:
-        src = column_sum_source(f, name)
+                 threads: int = 1, source: str | None = None) -> None:
+        src = column_sum_source(f, name) if source is None else source
+        self.source = src
         libs = ("-lmvec", "-lm") if "declare simd" in src else ("-lm",)
         try:
             path = shared_library(src.encode(), "colsum", self.FLAGS, libs,

@@ -214,15 +214,23 @@ class SumKernels:
                  Xd: np.ndarray, coef: np.ndarray, norm: float, compile: bool = True,
                  hessian: bool = True, threads: int | None = None,
                  blocked: bool = True) -> None:
-        g = sample_objective(layout, objective, margin)
-        th, x, xd, c = g.sx_in()
-        gv = g(th, x, xd, c)
-        grad = ca.gradient(gv, th)
-        fg = ca.Function("g_grad", [th, x, xd, c], [gv, grad])
-        funcs = [g, fg]
-        if hessian:  # its C grows as P^2 per sample: built only when IPOPT is to use it
-            H = ca.densify(ca.hessian(gv, th)[0])
-            funcs.append(ca.Function("g_hess", [th, x, xd, c], [H]))
+        key = (layout.K, layout.d, layout.with_noise, layout.lyapunov, layout.formulation,
+               objective, float(margin), bool(hessian))
+        cached = _KERNELS.get(key)
+        if cached is None:
+            g = sample_objective(layout, objective, margin)
+            th, x, xd, c = g.sx_in()
+            gv = g(th, x, xd, c)
+            grad = ca.gradient(gv, th)
+            fg = ca.Function("g_grad", [th, x, xd, c], [gv, grad])
+            funcs = [g, fg]
+            if hessian:  # its C grows as P^2 per sample: built only when IPOPT is to use it
+                H = ca.densify(ca.hessian(gv, th)[0])
+                funcs.append(ca.Function("g_hess", [th, x, xd, c], [H]))
+            cached = _KERNELS[key] = {"funcs": funcs, "sources": {}}
+            while len(_KERNELS) > _KERNELS_MAX:
+                _KERNELS.pop(next(iter(_KERNELS)))
+        funcs, g = cached["funcs"], cached["funcs"][0]
         n = X.shape[0]
         threads = kernel_threads(n) if threads is None else max(1, int(threads))
         self.threads = threads
@@ -235,7 +243,7 @@ class SumKernels:
         self._simd = None
         if compile and blocked and simd_enabled():
             try:
-                self._simd = _SimdSums(funcs, X, Xd, coef, threads)
+                self._simd = _SimdSums(funcs, X, Xd, coef, threads, cached["sources"])
             except (RuntimeError, UnsupportedOperation) as exc:
                 _LOG.info("vectorised sums unavailable (%s); using CasADi's maps", exc)
         self.engine = "simd" if self._simd is not None else "casadi"
@@ -301,6 +309,79 @@ class SumKernels:
         return _Objective(self)
 
 
+#: the per-sample kernels (CasADi functions and their C sources) of the problems built in this
+#: process, by layout, objective, margin and Hessian: a second fit of the same shape of problem
+#: (a cross-validation, a benchmark) skips the symbolic construction and the C translation
+_KERNELS: dict = {}
+_KERNELS_MAX = 16
+
+
+class GramKernels:
+    """The mean squared velocity error with the GMM fixed, through sufficient statistics.
+
+    With the mixing h^k(x_i) fixed (``SEDS(gmm="fixed")``), f(x_i) = M phi_i with
+    M = [A_1 ... A_K] (d x K d) and phi_i = [h^1(x_i) x_i; ...; h^K(x_i) x_i], so
+
+        J = (1/n) sum_i |f(x_i) - xdot_i|^2
+          = (1/n) (tr(M G M^T) - 2 tr(M C) + s),   G = sum_i phi_i phi_i^T,
+                                                    C = sum_i phi_i xdot_i^T, s = sum_i |xdot_i|^2
+
+    exactly (the same J as :class:`SumKernels`' ``"mse"`` up to rounding; tested), from a
+    (K d)-square matrix: one evaluation costs O((K d)^2 d) whatever the number of samples, and
+    CasADi differentiates it exactly (gradient and Hessian). The by-construction form only
+    (A_k from B_k, W_k and P; the constrained form's b_k would need phi_i = [h x_i; h]).
+
+    Parameters
+    ----------
+    layout : Layout
+    margin : float
+    gamma : array, shape (n, K)
+        The fixed mixing h^k(x_i).
+    X, Xd : arrays, shape (n, d)
+        Scaled positions (attractor frame) and velocities.
+    """
+
+    engine = "gram"
+    compiled = False
+
+    def __init__(self, layout: Layout, margin: float, gamma: np.ndarray, X: np.ndarray,
+                 Xd: np.ndarray) -> None:
+        if layout.formulation != "by-construction":
+            raise ValueError("GramKernels needs the by-construction form")
+        n, K = gamma.shape
+        d = X.shape[1]
+        Phi = (gamma[:, :, None] * X[:, None, :]).reshape(n, K * d)
+        G, C, s = Phi.T @ Phi, Phi.T @ Xd, float(np.sum(Xd * Xd))
+        theta = ca.SX.sym("theta", layout.size)
+        M = ca.horzcat(*unpack_casadi(theta, layout, margin)["A"])
+        J = (ca.trace(M @ ca.DM(G) @ M.T) - 2 * ca.trace(M @ ca.DM(C)) + s) / n
+        grad = ca.gradient(J, theta)
+        self._f = ca.Function("seds_gram_objective", [theta], [J])
+        self._g = ca.Function("seds_gram_gradient", [theta], [grad])
+        self._h = ca.Function("seds_gram_hessian", [theta], [ca.densify(ca.hessian(J, theta)[0])])
+        self.size, self.n_samples, self.norm, self.threads = layout.size, n, float(n), 1
+
+    def value(self, theta) -> float:
+        """J(theta)."""
+        return float(self._f(theta))
+
+    def gradient(self, theta) -> np.ndarray:
+        """grad J(theta), shape (P,)."""
+        return np.asarray(self._g(theta)).ravel()
+
+    def hessian(self, theta) -> np.ndarray:
+        """Hess J(theta), shape (P, P)."""
+        return np.asarray(self._h(theta))
+
+    def casadi_function(self) -> ca.Function:
+        """J as a CasADi Function theta -> J."""
+        return self._f
+
+    def nlp_objective(self) -> ca.Function:
+        """J for IPOPT: an SX Function, so CasADi supplies its exact derivatives."""
+        return self._f
+
+
 def simd_enabled() -> bool:
     """Whether the sums over samples may use the vectorised C loops
     (:mod:`seds_casadi.codegen.column_sum`): a C compiler is available and
@@ -312,22 +393,32 @@ class _SimdSums:
     """J, (J, grad J) and Hess J summed over the samples by vectorised C loops: the Hessian's
     lower triangle only (P (P + 1) / 2 sums instead of P^2), mirrored afterwards."""
 
-    def __init__(self, funcs: list[ca.Function], X, Xd, coef, threads: int) -> None:
+    def __init__(self, funcs: list[ca.Function], X, Xd, coef, threads: int,
+                 sources: dict | None = None) -> None:
+        sources = {} if sources is None else sources  # name -> (function, C source), reused
         U = np.vstack([np.asarray(X, float).T, np.asarray(Xd, float).T,
                        np.asarray(coef, float)[None, :]])
         row = U.shape[0] - 1  # c: every objective is proportional to it (0 in the padding)
-        self.value = ColumnSum(funcs[0], U, row, "seds_J", threads)
-        self.value_gradient = ColumnSum(funcs[1], U, row, "seds_JG", threads)
+
+        def column_sum(f, name):
+            f, src = sources.get(name, (f, None))
+            cs = ColumnSum(f, U, row, name, threads, source=src)
+            sources[name] = (f, cs.source)
+            return cs
+
+        self.value = column_sum(funcs[0], "seds_J")
+        self.value_gradient = column_sum(funcs[1], "seds_JG")
         self._hess = None
         if len(funcs) > 2:
-            h = funcs[2]
-            th, x, xd, c = h.sx_in()
-            H = h(th, x, xd, c)
-            P = H.shape[0]
+            P = funcs[2].size1_out(0)
             self._tril = np.tril_indices(P)
-            lower = ca.vertcat(*[H[int(i), int(j)] for i, j in zip(*self._tril)])
-            self._hess = ColumnSum(ca.Function("g_hess_tril", [th, x, xd, c], [lower]), U, row,
-                                   "seds_H", threads)
+            h = sources.get("seds_H", (None,))[0]
+            if h is None:
+                th, x, xd, c = funcs[2].sx_in()
+                H = funcs[2](th, x, xd, c)
+                lower = ca.vertcat(*[H[int(i), int(j)] for i, j in zip(*self._tril)])
+                h = ca.Function("g_hess_tril", [th, x, xd, c], [lower])
+            self._hess = column_sum(h, "seds_H")
             self._P = P
 
     def hessian(self, theta) -> np.ndarray:

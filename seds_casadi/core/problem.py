@@ -18,7 +18,7 @@ from ._random import sklearn_random_state
 from .demonstrations import Demonstrations
 from .gmm import responsibilities
 from .lyapunov import LYAPUNOV_DIAG_RANGE, estimate_lyapunov
-from .objectives import SumKernels
+from .objectives import GramKernels, SumKernels
 from .parametrization import Layout, unpack_numpy
 
 __all__ = ["SEDSProblem", "build_problem", "direction_weights", "hessian_strategy", "HESSIANS"]
@@ -376,26 +376,35 @@ def _initial_theta(
     With ``init="lpv"``, as LPV-DS: EM on the positions alone gives the priors, means and
     covariances (so the mixing is that GMM's posterior), and the A_k are those of least
     velocity error under that mixing, stable for P0 (:func:`_stable_gains_lpv`, started from the
-    projected GMR gains of the joint EM's nearest components).
+    projected GMR gains of the joint EM's nearest components). ``init="pc"``: the same with the
+    GMM of :func:`_pc_gmm`, started from each cluster's weighted least-squares gain, projected
+    (no joint EM).
     """
     K, d = layout.K, layout.d
     P0 = np.eye(d) if P0 is None else np.asarray(P0, dtype=float)
+    if init == "pc":  # no joint EM: the start gains are each cluster's weighted regression
+        weights, means, covs = _pc_gmm(X, Xd, K, random_state,
+                                       INIT_REG_COVAR if d <= 3 else INIT_REG_COVAR_HIGH_D)
+        gamma = _posterior(X, weights, means, covs)
+        start = []
+        for k in range(K):
+            Xw = X * gamma[:, k:k + 1]
+            A = np.linalg.lstsq(Xw.T @ X + 1e-9 * np.eye(d), Xw.T @ Xd, rcond=None)[0].T
+            start.append(_project_stable(A, P0, margin))
+        gains = _stable_gains_lpv(gamma, X, Xd, P0, margin, start)
+        return _pack_theta(layout, P0, margin, weights, means, covs, gains, X, Xd, gamma)
     joint = np.hstack([X, Xd])
     gm = _em(joint, K, d, random_state)
     Sx = gm.covariances_[:, :d, :d]
     gmr = [_project_stable(np.linalg.solve(Sx[k] + 1e-6 * np.eye(d),
                                            gm.covariances_[k, :d, d:]).T, P0, margin)
            for k in range(K)]  # Sigma_xdotx Sigma_x^-1, projected
-    if init not in ("lpv", "pc"):
+    if init != "lpv":
         resp = gm.predict_proba(joint) if layout.with_noise else None
         return _pack_theta(layout, P0, margin, gm.weights_, gm.means_[:, :d], Sx, gmr, X, Xd,
                            resp)
-    if init == "pc":
-        weights, means, covs = _pc_gmm(X, Xd, K, random_state,
-                                       INIT_REG_COVAR if d <= 3 else INIT_REG_COVAR_HIGH_D)
-    else:
-        gx = _em(X, K, d, random_state)
-        weights, means, covs = gx.weights_, gx.means_, gx.covariances_
+    gx = _em(X, K, d, random_state)
+    weights, means, covs = gx.weights_, gx.means_, gx.covariances_
     gamma = _posterior(X, weights, means, covs)
     nearest = [int(np.argmin(np.sum((gm.means_[:, :d] - m) ** 2, axis=1))) for m in means]
     gains = _stable_gains_lpv(gamma, X, Xd, P0, margin, [gmr[j] for j in nearest])
@@ -473,9 +482,17 @@ def build_problem(demos: Demonstrations, n_components: int, objective: str,
     # iteration limit with two threads), and to the blocked sums too (the test problems of
     # tests/test_lyapunov.py ended 0.33 and 2.4e-6 infeasible): it keeps one serial sum
     constrained = formulation == "constrained"
-    kernels = SumKernels(layout, objective, stability_margin, Xs, Xds, coef, norm,
-                         compile=compile, hessian=strategy == "exact",
-                         threads=1 if constrained else None, blocked=not constrained)
+    if gmm == "fixed" and objective == "mse" and not constrained:
+        # the mixing is fixed: the squared error is a quadratic form in the gains whose
+        # (K d)-square statistics replace the sums over samples (exact, independent of n)
+        p0 = unpack_numpy(theta0, layout, stability_margin)
+        gamma = responsibilities(Xs, p0["priors"], p0["mu"], p0["Sx"])
+        kernels = GramKernels(layout, stability_margin, gamma, Xs, Xds)
+        strategy = "exact" if hessian == "auto" else strategy
+    else:
+        kernels = SumKernels(layout, objective, stability_margin, Xs, Xds, coef, norm,
+                             compile=compile, hessian=strategy == "exact",
+                             threads=1 if constrained else None, blocked=not constrained)
     return SEDSProblem(
         layout=layout, objective=objective, X=Xs, Xd=Xds, weights=w,
         position_scale=sx, velocity_scale=sv, target=demos.target.copy(), theta0=theta0,
