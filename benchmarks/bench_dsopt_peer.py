@@ -18,6 +18,7 @@ The peer is not shipped (it has no licence file): clone it and install cvxpy::
     git clone https://github.com/SunannnSun/dsopt /tmp/dsopt && pip install cvxpy
     python benchmarks/bench_dsopt_peer.py --dsopt-path /tmp/dsopt            # 26 shapes, K = 4
     python benchmarks/bench_dsopt_peer.py --dsopt-path /tmp/dsopt --shapes Angle CShape -K 3
+    python benchmarks/bench_dsopt_peer.py --dsopt-path /tmp/dsopt -K 6 --ours pc-fixed
 """
 
 from __future__ import annotations
@@ -77,11 +78,18 @@ def _fit_peer(dsopt_class, train, K: int, seed: int):
     return predict, seconds, certified
 
 
-def _fit_ours(train, K: int, seed: int):
+#: our learner's settings, by ``--ours``: SEDS as published (joint EM, joint fit, P = I), or a
+#: physically-consistent GMM kept fixed with a learned P (LPV-DS's split in our NLP)
+OURS = {"seds": {},
+        "pc-fixed": {"lyapunov": "learned", "gain_limit": 10.0, "init": "pc", "gmm": "fixed"}}
+
+
+def _fit_ours(train, K: int, seed: int, ours: str = "seds"):
     t0 = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
-        model = SEDS(K, objective="mse", random_state=seed).fit(train.demonstrations()).model_
+        model = SEDS(K, objective="mse", random_state=seed,
+                     **OURS[ours]).fit(train.demonstrations()).model_
     seconds = time.perf_counter() - t0
     c = model.certificate
     return model.predict, seconds, bool(c["max_eig_lyapunov"] < 0 and c["min_eig_cov"] > 0)
@@ -93,18 +101,21 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--shapes", nargs="+", default=list(LASA_SINGLE_SHAPES))
     ap.add_argument("-K", type=int, default=4, help="components, both methods [4]")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--ours", choices=list(OURS), default="seds",
+                    help="our learner's settings: SEDS (P = I, joint fit), or init='pc', "
+                         "gmm='fixed' with a learned P and gain_limit=10 [seds]")
     a = ap.parse_args(argv)
     dsopt_class = _peer_class(a.dsopt_path)
     # warm-up: the compiled SEDS problem for this K lands in the cache, cvxpy imports
-    _fit_ours(dsopt_sets(a.shapes[0])["train"], a.K, a.seed)
+    _fit_ours(dsopt_sets(a.shapes[0])["train"], a.K, a.seed, a.ours)
     _fit_peer(dsopt_class, dsopt_sets(a.shapes[0])["train"], a.K, a.seed)
     rows = []
-    print(f"ds-opt protocol, test demos, K = {a.K}; RMSE [mm/s] / e_dot / DTWD [mm], fit s")
+    print(f"ds-opt protocol, test demos, K = {a.K}, ours = {a.ours}; RMSE [mm/s] / e_dot / DTWD [mm], fit s")
     print(f"{'shape':<17} {'SEDS (ours)':>27} {'s':>6} {'cert':>4} | {'dsopt peer':>27} "
           f"{'s':>6} {'cert':>4} | peer/ours")
     for shape in a.shapes:
         sets = dsopt_sets(shape)
-        f_o, t_o, c_o = _fit_ours(sets["train"], a.K, a.seed)
+        f_o, t_o, c_o = _fit_ours(sets["train"], a.K, a.seed, a.ours)
         f_p, t_p, c_p = _fit_peer(dsopt_class, sets["train"], a.K, a.seed)
         s_o, s_p = dsopt_scores(f_o, sets["test"])[:3], dsopt_scores(f_p, sets["test"])[:3]
         rows.append((shape, s_o, t_o, c_o, s_p, t_p, c_p))
