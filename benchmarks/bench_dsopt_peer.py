@@ -110,7 +110,8 @@ def main(argv: list[str] | None = None) -> int:
     _fit_ours(dsopt_sets(a.shapes[0])["train"], a.K, a.seed, a.ours)
     _fit_peer(dsopt_class, dsopt_sets(a.shapes[0])["train"], a.K, a.seed)
     rows = []
-    print(f"ds-opt protocol, test demos, K = {a.K}, ours = {a.ours}; RMSE [mm/s] / e_dot / DTWD [mm], fit s")
+    print(f"ds-opt protocol, test demos, K = {a.K}, ours = {a.ours}; "
+          "RMSE [mm/s] / e_dot / DTWD [mm], fit s")
     print(f"{'shape':<17} {'SEDS (ours)':>27} {'s':>6} {'cert':>4} | {'dsopt peer':>27} "
           f"{'s':>6} {'cert':>4} | peer/ours")
     for shape in a.shapes:

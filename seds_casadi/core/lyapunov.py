@@ -61,8 +61,13 @@ def estimate_lyapunov(X: np.ndarray, Xd: np.ndarray, max_iter: int = 200) -> np.
     for idx, (i, j) in enumerate(tril):
         L[i, j] = ca.exp(z[idx]) if i == j else z[idx]
     P = (d / ca.sumsqr(L)) * (L @ L.T)
-    c = ca.mtimes(ca.DM(Z), ca.reshape(P.T, d * d, 1))
-    J = ca.sumsqr(ca.fmax(c, 0)) / len(U) + REGULARISATION * ca.sumsqr(P - ca.SX.eye(d)) / d**2
+    # the samples enter as one matrix product in an MX graph (an SX graph would hold n
+    # nodes per sample: 0.15 s to build on 2,000 samples, longer than the solve)
+    zm = ca.MX.sym("z", len(tril))
+    Pm = ca.Function("P", [z], [P])(zm)
+    c = ca.mtimes(ca.DM(Z), ca.reshape(Pm.T, d * d, 1))
+    J = ca.sumsqr(ca.fmax(c, 0)) / len(U) + REGULARISATION * ca.sumsqr(Pm - ca.MX.eye(d)) / d**2
+    z_sx, z = z, zm
     lo, hi = np.log(LYAPUNOV_DIAG_RANGE[0]), np.log(LYAPUNOV_DIAG_RANGE[1])
     lbx = np.array([lo if i == j else -10.0 for i, j in tril])
     ubx = np.array([hi if i == j else 10.0 for i, j in tril])
@@ -75,5 +80,5 @@ def estimate_lyapunov(X: np.ndarray, Xd: np.ndarray, max_iter: int = 200) -> np.
     zs = np.asarray(res["x"]).ravel()
     if not (np.all(np.isfinite(zs)) and float(Jf(zs)) < float(Jf(z0))):
         return np.eye(d)
-    Pn = np.asarray(ca.Function("P", [z], [P])(zs))
+    Pn = np.asarray(ca.Function("P", [z_sx], [P])(zs))
     return 0.5 * (Pn + Pn.T)
