@@ -72,6 +72,23 @@ def test_cli_fit_with_a_learned_lyapunov_matrix_and_a_gain_limit(tmp_path, spira
         assert np.linalg.eigvalsh(A.T @ P + P @ A).max() < 0
 
 
+def test_cli_fit_with_a_fixed_physically_consistent_gmm(tmp_path, spiral_demos):
+    demo_file = tmp_path / "demos.npz"
+    save_demonstrations(demo_file, spiral_demos)
+    out = tmp_path / "out"
+    res = subprocess.run(_cli() + ["fit", str(demo_file), "-K", "3", "--objective", "mse",
+                                   "--lyapunov", "learned", "--init", "pc", "--gmm", "fixed",
+                                   "--out", str(out)], capture_output=True, text=True,
+                         timeout=600)
+    assert res.returncode == 0, res.stderr
+    model = StableDS.load(out / "model.npz")  # the certificate is re-checked on load
+    assert model.fit_info["init"] == "pc" and model.fit_info["gmm"] == "fixed"
+    assert model.fit_info["sums"] == "gram"
+    bad = subprocess.run(_cli() + ["fit", str(demo_file), "--gmm", "frozen"],
+                         capture_output=True, text=True, timeout=120)
+    assert bad.returncode == 2 and "--gmm" in bad.stderr
+
+
 def test_cli_fit_chooses_settings_on_held_out_demonstrations(tmp_path, spiral_demos):
     demo_file = tmp_path / "demos.npz"
     save_demonstrations(demo_file, spiral_demos)
