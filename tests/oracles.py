@@ -299,3 +299,17 @@ def linear_flow_demos(A: np.ndarray, n: int = 4, T: float = 6.0, dt: float = 0.0
             traj.append(M @ traj[-1])
         paths.append(np.array(traj))
     return Demonstrations(paths, dt=dt, target=np.zeros(A.shape[0]))
+
+
+def decaying_spiral_demos():
+    """Three 2-D demonstrations of a decaying spiral into the origin (200 samples each, 100 mm
+    wide), for the LPV and PC initialisations' tests."""
+    from seds_casadi import Demonstrations
+
+    t = np.linspace(0, 1, 200)
+    demos = []
+    for phi in (0.0, 0.5, 1.0):
+        r = np.exp(-3 * t)
+        a = phi + 4 * t
+        demos.append(np.column_stack([r * np.cos(a), r * np.sin(a)]) * 100)
+    return Demonstrations([p - p[-1] for p in demos], dt=t[1])

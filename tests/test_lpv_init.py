@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from oracles import decaying_spiral_demos
 
-from seds_casadi import SEDS, Demonstrations
+from seds_casadi import SEDS
 from seds_casadi.core.problem import _stable_gains_lpv
 
 
@@ -51,14 +52,7 @@ def test_gains_respect_stability_when_the_data_do_not():
     assert got[0, 1] - got[1, 0] == pytest.approx(2.0, rel=0.05)
 
 
-def _spiral_demos():
-    t = np.linspace(0, 1, 200)
-    demos = []
-    for phi in (0.0, 0.5, 1.0):
-        r = np.exp(-3 * t)
-        a = phi + 4 * t
-        demos.append(np.column_stack([r * np.cos(a), r * np.sin(a)]) * 100 - [0, 0])
-    return Demonstrations([p - p[-1] for p in demos], dt=t[1])
+_spiral_demos = decaying_spiral_demos
 
 
 @pytest.mark.parametrize("lyapunov", ["identity", "learned"])

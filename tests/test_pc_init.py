@@ -11,8 +11,9 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from oracles import decaying_spiral_demos
 
-from seds_casadi import SEDS, Demonstrations
+from seds_casadi import SEDS
 from seds_casadi.core.problem import _pc_gmm, gmm_indices, pc_similarity
 
 
@@ -64,14 +65,7 @@ def test_clusters_follow_the_direction_where_positions_alone_cannot():
     assert np.ptp(em.means_[:, 0]) > 0.5  # EM on positions cuts across the lanes instead
 
 
-def _spiral_demos():
-    t = np.linspace(0, 1, 200)
-    demos = []
-    for phi in (0.0, 0.5, 1.0):
-        r = np.exp(-3 * t)
-        a = phi + 4 * t
-        demos.append(np.column_stack([r * np.cos(a), r * np.sin(a)]) * 100)
-    return Demonstrations([p - p[-1] for p in demos], dt=t[1])
+_spiral_demos = decaying_spiral_demos
 
 
 @pytest.mark.parametrize("lyapunov", ["identity", "learned"])
