@@ -135,3 +135,22 @@ def test_fixed_gmm_mse_statistics_equal_the_sum_over_samples(lyapunov):
                                    rtol=1e-8, atol=1e-10)
         np.testing.assert_allclose(prob.kernels.hessian(theta)[np.ix_(free, free)],
                                    ref.hessian(theta)[np.ix_(free, free)], rtol=1e-7, atol=1e-9)
+
+
+def test_fixed_gmm_in_7d_on_exactly_linear_data_is_certified():
+    # a 7-D linear flow is fitted almost exactly: the joint covariances' velocity block is then
+    # A Sigma_x A^T plus a tiny residual, and a floor far below that block was lost to rounding
+    # (joint covariance "not positive definite", eigenvalue -3e-11, before the relative floor)
+    from oracles import linear_flow_demos
+
+    rng = np.random.default_rng(3)
+    M, W = rng.normal(size=(7, 7)), rng.normal(size=(7, 7))
+    A = -(M @ M.T / 7 + 0.5 * np.eye(7)) + 0.3 * (W - W.T)
+    demos = linear_flow_demos(A, n=4, T=4.0, dt=0.02)
+    model = SEDS(4, objective="mse", random_state=0, init="pc", gmm="fixed").fit(demos).model_
+    c = model.certificate
+    assert c["max_eig_lyapunov"] < 0 and c["min_eig_cov"] > 0
+    X = np.concatenate(demos.positions)
+    cos = np.sum(model.predict(X) * (X @ A.T), 1) / (
+        np.linalg.norm(model.predict(X), axis=1) * np.linalg.norm(X @ A.T, axis=1))
+    assert np.median(cos) > 0.95

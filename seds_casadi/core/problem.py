@@ -149,7 +149,12 @@ class SEDSProblem:
             for k in range(K):
                 r = self.Xd - self.X @ p["A"][k].T
                 wk = h[:, k] / max(h[:, k].sum(), 1e-300)
-                Q[k] = (r * wk[:, None]).T @ r + 1e-6 * np.eye(d)
+                # the floor grows with A Sigma_x A^T: Q is the Schur complement of the joint
+                # covariance, so a floor far below that block's size is lost to rounding when
+                # the data are fitted exactly (7-D linear data, a fixed GMM: eigenvalue -3e-11)
+                AS = p["A"][k] @ p["Sx"][k] @ p["A"][k].T
+                floor = 1e-6 + 1e-8 * float(np.linalg.norm(AS, 2))
+                Q[k] = (r * wk[:, None]).T @ r + floor * np.eye(d)
         means = np.empty((K, 2 * d))
         covs = np.empty((K, 2 * d, 2 * d))
         for k in range(K):
