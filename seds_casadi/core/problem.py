@@ -390,7 +390,7 @@ def _initial_theta(
     if init == "pc":  # no joint EM: the start gains are each cluster's weighted regression
         weights, means, covs = _pc_gmm(X, Xd, K, random_state,
                                        INIT_REG_COVAR if d <= 3 else INIT_REG_COVAR_HIGH_D)
-        gamma = _posterior(X, weights, means, covs)
+        gamma = responsibilities(X, weights, means, covs)
         start = []
         for k in range(K):
             Xw = X * gamma[:, k:k + 1]
@@ -410,21 +410,10 @@ def _initial_theta(
                            resp)
     gx = _em(X, K, d, random_state)
     weights, means, covs = gx.weights_, gx.means_, gx.covariances_
-    gamma = _posterior(X, weights, means, covs)
+    gamma = responsibilities(X, weights, means, covs)
     nearest = [int(np.argmin(np.sum((gm.means_[:, :d] - m) ** 2, axis=1))) for m in means]
     gains = _stable_gains_lpv(gamma, X, Xd, P0, margin, [gmr[j] for j in nearest])
     return _pack_theta(layout, P0, margin, weights, means, covs, gains, X, Xd, gamma)
-
-
-def _posterior(X: np.ndarray, weights, means, covs) -> np.ndarray:
-    """The mixing gamma_k(x) of a GMM on the positions, (n, K), computed in log space."""
-    from scipy.stats import multivariate_normal
-
-    logp = np.stack([np.log(max(w, 1e-300)) + multivariate_normal(m, c, allow_singular=True)
-                     .logpdf(X).reshape(len(X)) for w, m, c in zip(weights, means, covs)], axis=1)
-    logp -= logp.max(axis=1, keepdims=True)
-    p = np.exp(logp)
-    return p / p.sum(axis=1, keepdims=True)
 
 
 def build_problem(demos: Demonstrations, n_components: int, objective: str,
