@@ -322,6 +322,7 @@ def test_impact_with_a_turned_face_leaves_along_its_normal():
         impact([1.0, 0.0], face_normal=[1.0, 0.0, 0.0])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["flat", "double_hill", "arctan", "rough_flat"])
 def test_simd_backend_equals_the_casadi_kernel(name):
     # the vectorised C loop is generated from the same SX step as CasADi's kernel

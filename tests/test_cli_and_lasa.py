@@ -15,6 +15,8 @@ from seds_casadi.app.cli import build_parser, command_logging
 from seds_casadi.app.lasa import CSV_COLUMNS, evaluate_shape, run_lasa
 from seds_casadi.core.datasets import LASA_SHAPES, LASA_SINGLE_SHAPES, load_lasa
 
+pytestmark = pytest.mark.slow
+
 
 def _cli():
     exe = shutil.which("seds-casadi")

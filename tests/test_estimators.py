@@ -49,6 +49,7 @@ def test_seds_on_sample_arrays_equals_seds_on_demonstrations(spiral_demos):
     np.testing.assert_allclose(a.predict(Xs[:20]), b.predict(Xs[:20]), rtol=1e-6, atol=1e-9)
 
 
+@pytest.mark.slow
 def test_grid_search_picks_seds_components_by_demonstration_folds():
     # two regimes (a fast spiral near the target, a slow drift further out): K=1 cannot fit both
     from scipy.linalg import expm

@@ -32,6 +32,7 @@ def test_joint_demos_put_the_club_head_on_the_demonstrations(wam_and_joint_demos
         assert np.max(np.abs(np.diff(q, axis=0))) < 0.5  # continuous: no IK branch jumps
 
 
+@pytest.mark.slow
 def test_seds_learns_and_reproduces_the_7d_joint_space_putts(wam_and_joint_demos):
     _, _, joints = wam_and_joint_demos
     with warnings.catch_warnings():

@@ -258,6 +258,7 @@ def test_dsopt_table_sets_ours_beside_the_published_figures():
 
 
 # ------------------------------------------------------------------ end to end (real fits)
+@pytest.mark.slow
 def test_evaluate_shape_dsopt_scores_train_and_test_with_a_certified_model(tmp_path):
     rows = evaluate_shape_dsopt("Angle", n_components=2, figure_path=str(tmp_path / "a.png"))
     assert [r.set for r in rows] == ["train", "test"]
@@ -274,6 +275,7 @@ def test_evaluate_shape_dsopt_scores_train_and_test_with_a_certified_model(tmp_p
     assert r_bic.k_choice == "bic:ds-opt" and r_bic.n_components in (1, 2) and r_bic.seconds_k > 0
 
 
+@pytest.mark.slow
 def test_run_lasa_runs_ds_opt_beside_the_other_protocols(tmp_path):
     res = run_lasa(shapes=["Angle"], objectives=["mse"], protocols=["all", "ds-opt"],
                    n_components=2, n_samples=25, out_dir=str(tmp_path), figures=False,
@@ -299,6 +301,7 @@ def test_run_lasa_split_protocol_scores_the_held_out_demos():
     assert by["split"].rmse != pytest.approx(by["all"].rmse, rel=1e-6)
 
 
+@pytest.mark.slow
 def test_cli_lasa_protocol_ds_opt_writes_the_csv_with_units(tmp_path):
     out = tmp_path / "dsopt"
     res = subprocess.run([sys.executable, "-m", "seds_casadi", "lasa", "--protocol", "ds-opt",

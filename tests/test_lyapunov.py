@@ -320,6 +320,7 @@ def test_gain_limit_bounds_the_stiffness_of_every_component(lyapunov):
         SEDS(1, gain_limit=-1.0).fit(demos)
 
 
+@pytest.mark.slow
 def test_hitting_motion_on_a_learned_lyapunov_model(tmp_path):
     """Eq. 8, 12 and 14 work unchanged on a model certified by a learned P, and it saves."""
     from seds_casadi.motion import HittingMotion, load_hitting_demos

@@ -12,6 +12,8 @@ import pytest
 
 from seds_casadi.app.play import SHOT_COLUMNS, PlayConfig, play
 
+pytestmark = pytest.mark.slow
+
 SCRIPT = Path(sys.executable).parent / "seds-casadi"
 
 

@@ -185,6 +185,7 @@ def test_dask_refused_port_fails_at_once_and_a_real_scheduler_answers():
             assert ex.submit(sum, [1, 2]).result() == 3
 
 
+@pytest.mark.slow
 def test_play_checks_its_executor_before_learning(tmp_path):
     pytest.importorskip("pinocchio")
     from seds_casadi.app.play import play
@@ -400,6 +401,7 @@ def _alive(pid: str) -> bool:
         return False
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("sig", ["SIGINT", "SIGKILL"])
 def test_workers_stop_within_two_seconds(tmp_path, sig):
     import signal
@@ -480,6 +482,7 @@ def _wait_for_children(pid: int, n: int, timeout: float) -> list:
     return _children(pid)
 
 
+@pytest.mark.slow
 def test_ctrl_c_on_a_command_with_workers_ends_cleanly(tmp_path):
     """``seds-casadi lasa --workers 2`` interrupted while its workers fit: exit 130 within
     2 s, one line and no traceback, no worker left, no temporary file."""

@@ -10,6 +10,8 @@ import subprocess
 import numpy as np
 import pytest
 
+pytestmark = pytest.mark.slow
+
 pytest.importorskip("pinocchio")
 
 from seds_casadi.app.cli import build_parser  # noqa: E402

@@ -34,6 +34,8 @@ from seds_casadi.robots.models import (
 )
 from seds_casadi.robots.orientation import log3_sx, orientation_error_sx
 
+pytestmark = pytest.mark.slow
+
 RNG = np.random.default_rng(7)
 
 

@@ -342,6 +342,7 @@ def test_demonstrations_that_end_far_from_the_target_give_a_warning(spiral_demos
 
 
 
+@pytest.mark.slow
 def test_a_many_component_fit_with_thin_components_is_certified():
     """K = 15 on smooth 3-D demonstrations gives components with ill-conditioned Sigma_x; the
     model still satisfies Eq. 10a to the certificate's 1e-8 (it once failed with 5.8e-8)."""
@@ -369,6 +370,7 @@ def test_a_many_component_fit_with_thin_components_is_certified():
     np.testing.assert_allclose(model.predict(model.target), 0.0, atol=1e-9)     # f(x*) = 0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("shape", ["CShape", "Sshape"])
 def test_direction_objective_moves_at_the_demonstrated_speeds(shape):
     """Issue 13: Eq. 9 fixes only directions; the returned model is calibrated so that its speed

@@ -8,6 +8,8 @@ import pytest
 from seds_casadi.robots import load_robot, place_robot, simulate_swing
 from seds_casadi.robots.limits import limit_report, start_blend, torque_load
 
+pytestmark = pytest.mark.slow
+
 
 def test_start_blend_is_a_smooth_ramp():
     T = 0.08

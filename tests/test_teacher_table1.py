@@ -286,6 +286,7 @@ def test_training_indices():
         training_indices(line, 5, "clustered", rng)
 
 
+@pytest.mark.slow
 def test_table1_runs_end_to_end_and_is_identical_on_local_processes(datasets, tmp_path):
     means, runs = run_table1(datasets, repetitions=2, seed=3)
     assert [(r.field, r.training, r.model) for r in means][:2] == [
@@ -315,6 +316,7 @@ def test_table1_runs_end_to_end_and_is_identical_on_local_processes(datasets, tm
     assert "paper" in format_table1(means)
 
 
+@pytest.mark.slow
 def test_table1_on_a_dask_local_cluster_gives_the_same_numbers(datasets):
     distributed = pytest.importorskip("distributed")
     small = {"double_hill": datasets["double_hill"]}
@@ -326,6 +328,7 @@ def test_table1_on_a_dask_local_cluster_gives_the_same_numbers(datasets):
     assert _values(remote) == _values(local)
 
 
+@pytest.mark.slow
 def test_unreachable_dask_scheduler_is_a_clear_error():
     with pytest.raises(ValueError, match="--dask .tcp://127.0.0.1:9.: cannot connect"):
         with open_executor(dask="tcp://127.0.0.1:9", timeout=2):
@@ -351,6 +354,7 @@ def test_table1_rejects_too_small_data_sets(datasets):
         run_table1({"double_hill": (f, ds)}, repetitions=0)
 
 
+@pytest.mark.slow
 def test_table1_command_line_quick(tmp_path):
     out = tmp_path / "t1"
     r = subprocess.run([sys.executable, "-m", "seds_casadi", "table1", "--quick",
@@ -384,6 +388,7 @@ def test_table1_config_checks_its_values():
         table1_command(field=["double_hill"])
 
 
+@pytest.mark.slow
 def test_the_teacher_keeps_to_direct_shots_unless_banks_are_allowed(datasets):
     f, ds = datasets["arctan"]
     r = simulate_shots(f, ds.ball, ds.stroke.launch_velocity(ds.alpha, ds.kappa), hole=ds.hole,

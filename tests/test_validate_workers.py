@@ -7,6 +7,8 @@ import sys
 import numpy as np
 import pytest
 
+pytestmark = pytest.mark.slow
+
 pytest.importorskip("exudyn")
 
 from seds_casadi.app.validate import VALIDATION_COLUMNS, ValidateConfig, validate  # noqa: E402

@@ -14,7 +14,8 @@ from seds_casadi.minigolf.fields import Field, load_field
 from seds_casadi.minigolf.teacher import Stroke, Teacher
 from seds_casadi.sim.exudyn_shot import field_mesh, free_fall, simulate_shot_exudyn
 
-pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
+pytestmark = [pytest.mark.slow,
+              pytest.mark.filterwarnings("ignore::DeprecationWarning")]
 STROKE = Stroke(np.array([0.995, 0.097, -0.003]), 0.99)
 
 
