@@ -19,9 +19,10 @@ import time
 
 import numpy as np
 
-from seds_casadi.minigolf.ball import BallKernel, ball_kernel, simulate_shots
+from seds_casadi.minigolf import Stroke, success_map
+from seds_casadi.minigolf.ball import simulate_shots
+from seds_casadi.minigolf.ball_kernel import BallKernel, ball_kernel
 from seds_casadi.minigolf.fields import load_field
-from seds_casadi.minigolf.teacher import Stroke, success_map
 
 
 def shots(field, n, rng):

@@ -23,8 +23,9 @@ import time
 
 import numpy as np
 
-from seds_casadi.app.lasa import BIC_RULES, dsopt_table, run_lasa
+from seds_casadi.app.lasa import dsopt_table, run_lasa
 from seds_casadi.core.datasets import LASA_SINGLE_SHAPES
+from seds_casadi.core.model_selection import BIC_RULES
 from seds_casadi.core.parametrization import OBJECTIVES
 
 

@@ -29,11 +29,11 @@ import time
 
 import numpy as np
 
+from seds_casadi.minigolf import Stroke, collect_dataset, success_map
 from seds_casadi.minigolf.ball import simulate_shots
 from seds_casadi.minigolf.fields import Field, load_field
 from seds_casadi.minigolf.parameters import make_model
 from seds_casadi.minigolf.table1 import format_table1, run_table1, training_indices
-from seds_casadi.minigolf.teacher import Stroke, collect_dataset, success_map
 from seds_casadi.motion.hitting import HittingMotion
 from seds_casadi.motion.putting_demos import load_hitting_demos
 

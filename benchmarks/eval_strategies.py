@@ -17,12 +17,13 @@ import time
 
 import numpy as np
 
+from seds_casadi.minigolf import Stroke, collect_dataset
 from seds_casadi.minigolf.ball import simulate_shots
 from seds_casadi.minigolf.fields import load_field
+from seds_casadi.minigolf.hitting_data import paper_situations
 from seds_casadi.minigolf.parameters import make_model
 from seds_casadi.minigolf.strategies import explore
 from seds_casadi.minigolf.strategy_choice import StrategyChoice
-from seds_casadi.minigolf.teacher import Stroke, collect_dataset, paper_situations
 from seds_casadi.motion.hitting import HittingMotion
 from seds_casadi.motion.putting_demos import load_hitting_demos
 

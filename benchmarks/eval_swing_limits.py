@@ -21,9 +21,8 @@ import time
 
 import numpy as np
 
-from seds_casadi.minigolf.ball import BALL_RADIUS
 from seds_casadi.minigolf.fields import load_field
-from seds_casadi.motion import HittingMotion, load_hitting_demos
+from seds_casadi.motion import BALL_RADIUS, HittingMotion, load_hitting_demos
 from seds_casadi.robots import place_robot, simulate_swing
 
 KAPPA = {"wam": (0.5, 1.5), "katana": (0.2, 0.45)}

@@ -19,7 +19,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from seds_casadi import SEDS, ConvergenceWarning, DemoSearchCV  # noqa: E402
-from seds_casadi.app.plotting import plot_streamlines  # noqa: E402
+from seds_casadi.app.plot_ds import plot_streamlines  # noqa: E402
 from seds_casadi.core.datasets import load_lasa  # noqa: E402
 from seds_casadi.core.search import METRICS  # noqa: E402
 

@@ -21,10 +21,12 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from seds_casadi.app.plotting import plot_field, plot_strategies, plot_success_map
+from seds_casadi.minigolf import Stroke, success_map
 from seds_casadi.minigolf.ball import simulate_shots
 from seds_casadi.minigolf.fields import load_field
+from seds_casadi.minigolf.hitting_data import paper_situations
 from seds_casadi.minigolf.strategies import explore
-from seds_casadi.minigolf.teacher import Stroke, Teacher, paper_situations, success_map
+from seds_casadi.minigolf.teacher import Teacher
 from seds_casadi.motion.hitting import HittingMotion
 from seds_casadi.motion.putting_demos import load_hitting_demos
 

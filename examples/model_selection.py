@@ -17,7 +17,7 @@ import numpy as np  # noqa: E402
 from sklearn.model_selection import GridSearchCV, GroupKFold, KFold  # noqa: E402
 
 from seds_casadi import SEDS, ConvergenceWarning  # noqa: E402
-from seds_casadi.app.plotting import plot_streamlines  # noqa: E402
+from seds_casadi.app.plot_ds import plot_streamlines  # noqa: E402
 from seds_casadi.core.datasets import load_lasa  # noqa: E402
 from seds_casadi.minigolf.parameters import GMRModel  # noqa: E402
 

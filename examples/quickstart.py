@@ -12,7 +12,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 from seds_casadi import SEDS  # noqa: E402
-from seds_casadi.app.plotting import plot_streamlines
+from seds_casadi.app.plot_ds import plot_streamlines
 from seds_casadi.core.datasets import load_lasa
 
 ap = argparse.ArgumentParser()

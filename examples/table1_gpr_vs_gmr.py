@@ -19,9 +19,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 from seds_casadi.app.executors import open_executor
 from seds_casadi.app.table1 import fig10, fig11
+from seds_casadi.minigolf import Stroke, collect_dataset
 from seds_casadi.minigolf.fields import load_field
 from seds_casadi.minigolf.table1 import format_table1, run_table1
-from seds_casadi.minigolf.teacher import Stroke, collect_dataset
 from seds_casadi.motion.hitting import HittingMotion
 from seds_casadi.motion.putting_demos import load_hitting_demos
 

@@ -19,10 +19,10 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from seds_casadi.app.play import play_shot
+from seds_casadi.minigolf import Stroke, collect_dataset
 from seds_casadi.minigolf.fields import load_field
 from seds_casadi.minigolf.parameters import make_model
 from seds_casadi.minigolf.table1 import PAPER_TABLE1, protocol, training_indices
-from seds_casadi.minigolf.teacher import Stroke, collect_dataset
 from seds_casadi.motion.hitting import HittingMotion
 from seds_casadi.motion.putting_demos import load_hitting_demos
 

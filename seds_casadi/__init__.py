@@ -4,10 +4,12 @@ Reference implementation of Khansari-Zadeh, Kronander and Billard, "Learning to 
 A Dynamical System-based Approach" (Advanced Robotics, 2012), and of SEDS in Python.
 """
 
-from .core.demonstrations import Demonstrations, load_demonstrations, save_demonstrations
+from .core.demo_files import load_demonstrations, save_demonstrations
+from .core.demonstrations import Demonstrations
 from .core.errors import ConvergenceWarning, ModelFileError, SEDSError, SolverError, StabilityError
+from .core.problem import SEDSProblem
 from .core.search import DemoSearchCV
-from .core.seds import SEDS, SEDSProblem
+from .core.seds import SEDS
 from .core.stable_ds import StableDS, certify
 
 __version__ = "0.1.0"

@@ -5,15 +5,10 @@ import json
 import numpy as np
 import pytest
 
-from seds_casadi.minigolf.ball import (
-    BALL_RADIUS,
-    MU_SLIDE,
-    G,
-    capture_speed,
-    impact,
-    simulate_shots,
-)
+from seds_casadi.minigolf.ball import capture_speed, impact, simulate_shots
+from seds_casadi.minigolf.ball_physics import MU_SLIDE
 from seds_casadi.minigolf.fields import Field, field_names, load_field, stimp_to_rho
+from seds_casadi.motion import BALL_RADIUS, G
 
 
 def _field(surface, rho=0.0, boundary="walls", hole=(2.4, 0.0), **kw):
@@ -326,7 +321,7 @@ def test_impact_with_a_turned_face_leaves_along_its_normal():
 @pytest.mark.parametrize("name", ["flat", "double_hill", "arctan", "rough_flat"])
 def test_simd_backend_equals_the_casadi_kernel(name):
     # the vectorised C loop is generated from the same SX step as CasADi's kernel
-    from seds_casadi.minigolf.ball import BallKernel
+    from seds_casadi.minigolf.ball_kernel import BallKernel
 
     f = load_field(name)
     B, V = _aimed_shots(f, 700, 5)  # > 2 x 256: both threads, blocks of 64 and a remainder
@@ -395,7 +390,7 @@ def test_a_rolling_ball_comes_off_a_wall_at_five_e_minus_two_sevenths(e):
 
 
 def test_wall_contacts_are_counted_and_banks_can_be_left_out_of_a_success_map():
-    from seds_casadi.minigolf.teacher import Stroke, success_map
+    from seds_casadi.minigolf import Stroke, success_map
 
     f = _plane(rho=0.0785)
     # straight into the side wall at y = 0.6, and straight along the field

@@ -8,9 +8,10 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from seds_casadi.minigolf.ball import BALL_RADIUS, G, _step, simulate_shots, substeps
+from seds_casadi.minigolf.ball import _step, simulate_shots, substeps
 from seds_casadi.minigolf.ball_kernel import STATE_SIZE, ball_step
 from seds_casadi.minigolf.fields import Field, load_field, stimp_to_rho
+from seds_casadi.motion import BALL_RADIUS, G
 
 BOWL_DEPTH = 0.1
 

@@ -15,8 +15,6 @@ from seds_casadi.app.lasa import (
     PUBLISHED_MEANS,
     PUBLISHED_SEDS,
     DsOptResult,
-    choose_k_by_bic,
-    dsopt_elbow_k,
     dsopt_scores,
     dsopt_sets,
     dsopt_table,
@@ -33,6 +31,7 @@ from seds_casadi.core.metrics import (
     simulate_until_slow,
     velocity_rmse,
 )
+from seds_casadi.core.model_selection import choose_k_by_bic, dsopt_elbow_k
 
 
 # ------------------------------------------------------------------ metrics, known answers

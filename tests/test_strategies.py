@@ -4,12 +4,12 @@ situations, the choice of the strategy most likely to succeed, saving, bad input
 import numpy as np
 import pytest
 
+from seds_casadi.minigolf import Stroke
 from seds_casadi.minigolf.ball import simulate_shots
 from seds_casadi.minigolf.fields import load_field
 from seds_casadi.minigolf.hitting_data import HittingDataset
 from seds_casadi.minigolf.strategies import Strategy, StrategySet, explore, route
 from seds_casadi.minigolf.strategy_choice import StrategyChoice
-from seds_casadi.minigolf.teacher import Stroke
 
 STROKE = Stroke(np.array([0.995, 0.097, -0.003]), 0.99)
 SMALL = {"resolution": (151, 41), "alpha_range": (-75.0, 75.0), "kappa_range": (0.8, 2.4)}

@@ -13,8 +13,10 @@ import pytest
 from seds_casadi import ModelFileError
 from seds_casadi.app.executors import InlineExecutor, open_executor
 from seds_casadi.app.table1 import Table1Config, table1_command
+from seds_casadi.minigolf import HittingDataset, Stroke, collect_dataset, success_map
 from seds_casadi.minigolf.ball import simulate_shots
 from seds_casadi.minigolf.fields import Field, load_field
+from seds_casadi.minigolf.hitting_data import paper_situations
 from seds_casadi.minigolf.table1 import (
     CSV_COLUMNS,
     format_table1,
@@ -22,15 +24,7 @@ from seds_casadi.minigolf.table1 import (
     training_indices,
     write_table1_csv,
 )
-from seds_casadi.minigolf.teacher import (
-    HittingDataset,
-    Stroke,
-    Teacher,
-    TeachingError,
-    collect_dataset,
-    paper_situations,
-    success_map,
-)
+from seds_casadi.minigolf.teacher import Teacher, TeachingError
 
 STROKE = Stroke(np.array([0.995, 0.097, -0.003]), 0.99)
 COARSE = {"resolution": (81, 26)}

@@ -9,9 +9,10 @@ import numpy as np
 import pytest
 
 from seds_casadi.app.validate import VALIDATION_COLUMNS, ValidateConfig, validate
+from seds_casadi.minigolf import Stroke
 from seds_casadi.minigolf.ball import impact, simulate_shots
 from seds_casadi.minigolf.fields import Field, load_field
-from seds_casadi.minigolf.teacher import Stroke, Teacher
+from seds_casadi.minigolf.teacher import Teacher
 from seds_casadi.sim.exudyn_shot import field_mesh, free_fall, simulate_shot_exudyn
 
 pytestmark = [pytest.mark.slow,

@@ -278,9 +278,9 @@ def _add_play(sub, quiet) -> None:
 
 
 def _cmd_fit(a) -> int:
-    from ..core.demonstrations import load_demonstrations
+    from ..core.demo_files import load_demonstrations
     from ..core.seds import SEDS
-    from .plotting import _plt, plot_1d_reproductions, save_figure
+    from .plotting import plot_1d_reproductions, pyplot, save_figure
 
     kw = {"dt": a.dt} if a.dt is not None else {}
     demos = load_demonstrations(a.demonstrations, **kw)
@@ -309,12 +309,12 @@ def _cmd_fit(a) -> int:
     span = max(float(max(abs(p - demos.target).max() for p in demos.positions)), 1e-9)
     repro = model.rollout(starts, dt=demos.estimated_dt(), tol=1e-3 * span, max_steps=20000)
     if demos.n_dims >= 2:
-        from .plotting import plot_fit_views
+        from .plot_ds import plot_fit_views
 
         fig = plot_fit_views(model, demos, repro, title=f"{os.path.basename(a.demonstrations)}: "
                              f"SEDS ({a.objective}, K={model.n_components})")
     else:
-        fig, ax = _plt().subplots(figsize=(5.5, 5))
+        fig, ax = pyplot().subplots(figsize=(5.5, 5))
         plot_1d_reproductions(model, demos, repro, ax=ax,
                               title=f"SEDS ({a.objective}, K={model.n_components})")
     save_figure(fig, os.path.join(a.out, "streamlines.png"))

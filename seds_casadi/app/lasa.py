@@ -25,7 +25,7 @@ results are ``results/seds_stats_all.mat``, dated 14 June 2018, and ``results/st
   2,000 training points) with the file's velocities, no trimming, target at the origin (where
   every LASA demonstration ends);
 - SEDS's ``mse`` objective by default; K given, or chosen by BIC on [x; xdot] for K = 1..15
-  (:func:`choose_k_by_bic`);
+  (:func:`~seds_casadi.core.model_selection.choose_k_by_bic`);
 - RMSE = mean over points of sqrt(mean over dims (f(x) - xdot)^2) [mm/s]
   (:func:`~seds_casadi.core.metrics.velocity_rmse`); e_dot = mean |1 - cos| with undefined
   directions counting 0 (:func:`~seds_casadi.core.metrics.pointwise_direction_error` with
@@ -39,7 +39,8 @@ results are ``results/seds_stats_all.mat``, dated 14 June 2018, and ``results/st
 Differences from the published run, kept on purpose: one fit per shape (a fixed seed) instead of
 10 repetitions; our SEDS's own IPOPT settings (``max_iter`` 1000, its tolerances) instead of
 SEDS's ``max_iter`` 500 and ``tol_stopping`` 1e-9; and scikit-learn's EM in the BIC search
-instead of MATLAB's ``fitgmdist`` (see :func:`choose_k_by_bic`).
+instead of MATLAB's ``fitgmdist`` (see
+:func:`~seds_casadi.core.model_selection.choose_k_by_bic`).
 """
 
 from __future__ import annotations
@@ -61,21 +62,15 @@ from ..core.metrics import (
     dtw_distance,
     velocity_rmse,
 )
-from ..core.model_selection import (  # noqa: F401 - re-exported
-    BIC_RULES,
-    bic_scores,
-    choose_k_by_bic,
-    dsopt_elbow_k,
-)
+from ..core.model_selection import BIC_RULES, choose_k_by_bic
 from ..core.parametrization import OBJECTIVES
 from ..core.search import DemoSearchCV, held_out_scores
 from ..core.seds import SEDS
 
 __all__ = ["LasaResult", "evaluate_shape", "run_lasa", "write_csv", "summary_table", "PROTOCOLS",
            "DEFAULT_PROTOCOLS", "DsOptResult", "DsOptSet", "dsopt_sets", "dsopt_scores",
-           "evaluate_shape_dsopt",
-           "choose_k_by_bic", "bic_scores", "dsopt_elbow_k", "write_dsopt_csv", "dsopt_table",
-           "PUBLISHED_MEANS", "PUBLISHED_SEDS", "DSOPT_COLUMNS", "BIC_RULES"]
+           "evaluate_shape_dsopt", "write_dsopt_csv", "dsopt_table", "PUBLISHED_MEANS",
+           "PUBLISHED_SEDS", "DSOPT_COLUMNS"]
 
 PROTOCOLS = ("all", "split", "ds-opt")
 #: what :func:`run_lasa` and ``seds-casadi lasa`` run unless told otherwise
@@ -317,7 +312,8 @@ def evaluate_shape_dsopt(shape: str, objective: str = "mse", n_components: int |
     objective : {"mse", "direction", "likelihood"}, default "mse"
         ds-opt runs SEDS with ``mse``.
     n_components : int, "bic" or "published", default "bic"
-        K; ``"bic"``: :func:`choose_k_by_bic` on the training set (up to ``k_max``);
+        K; ``"bic"``: :func:`~seds_casadi.core.model_selection.choose_k_by_bic` on the
+        training set (up to ``k_max``);
         ``"published"``: the K the published runs used most for this shape.
     k_max : int, default 15
     random_state : int
@@ -373,10 +369,11 @@ def evaluate_shape_dsopt(shape: str, objective: str = "mse", n_components: int |
             float(pub[off]), float(pub[off + 1]), float(pub[off + 2]), int(pub[0]),
             float(model.fit_info["objective"]), chosen))
     if figure_path:
-        from .plotting import _plt, plot_streamlines, save_figure
+        from .plot_ds import plot_streamlines
+        from .plotting import pyplot, save_figure
 
         test = sets["test"]
-        fig, ax = _plt().subplots(figsize=(5, 4.5))
+        fig, ax = pyplot().subplots(figsize=(5, 4.5))
         plot_streamlines(model, test.demonstrations(),
                          [paths["test"][:, n] for n in range(len(test.demos))], ax=ax,
                          title=f"{shape} · {objective} · ds-opt test · K={K}", unit="mm")
@@ -437,9 +434,10 @@ def evaluate_shape(shape: str, objective: str = "direction", protocol: str = "al
     repro = model.rollout(starts, dt=raw_dt, max_steps=max_len, tol=1.0)
     dtw = [dtw_distance(r, p) for r, p in zip(repro, test.positions)]
     if figure_path:
-        from .plotting import _plt, plot_streamlines, save_figure
+        from .plot_ds import plot_streamlines
+        from .plotting import pyplot, save_figure
 
-        fig, ax = _plt().subplots(figsize=(5, 4.5))
+        fig, ax = pyplot().subplots(figsize=(5, 4.5))
         plot_streamlines(model, test, repro, ax=ax, unit="mm",
                          title=f"{shape} · {objective} · {protocol} · K={n_components}")
         save_figure(fig, figure_path)
@@ -495,7 +493,8 @@ def run_lasa(shapes=None, objectives=None, protocols=DEFAULT_PROTOCOLS,
         :func:`seds_casadi.app.executors.open_executor`).
     dsopt_objectives : sequence of names, optional
         Objectives of the ``ds-opt`` runs. Default: ``objectives`` if given, else ``mse``.
-    k_max, bic_rule : see :func:`choose_k_by_bic` (``ds-opt`` with ``n_components="bic"``)
+    k_max, bic_rule : see :func:`~seds_casadi.core.model_selection.choose_k_by_bic`
+        (``ds-opt`` with ``n_components="bic"``)
 
     Returns
     -------

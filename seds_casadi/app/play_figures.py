@@ -7,7 +7,7 @@ import os
 
 import numpy as np
 
-from .plotting import _plt, plot_field, save_figure
+from .plotting import plot_field, pyplot, save_figure
 
 __all__ = ["play_figures", "strategy_figure"]
 
@@ -33,7 +33,7 @@ def play_figures(fld, motion, data, fitted: dict, rows: list[dict], learners, ou
 
 
 def _shots_figure(fld, rows, learners, out, robot) -> None:
-    plt = _plt()
+    plt = pyplot()
     fig, axs = plt.subplots(len(learners), 1, figsize=(9.5, 3.6 * len(learners)), squeeze=False)
     for ax, m in zip(axs[:, 0], learners):
         rs = [r for r in rows if r["method"] == m]
@@ -55,7 +55,7 @@ def _motion_figure(motion, out) -> None:
     (x-y) and from the side (x-z), positions relative to the ball."""
     from ..motion.hitting import rotation_z
 
-    plt = _plt()
+    plt = pyplot()
     fig, (top, side) = plt.subplots(2, 1, figsize=(8, 7.6), sharex=True,
                                     gridspec_kw={"height_ratios": [3, 1.3]})
     for deg, c in ((0.0, "k"), (15.0, "tab:blue"), (-15.0, "tab:orange")):
@@ -87,7 +87,7 @@ def _parameters_figure(fld, data, fitted, out) -> None:
     """Each learner's hitting angle (and gain) against the teacher's, on the teacher's data."""
     from ..minigolf.strategy_choice import StrategyChoice
 
-    plt = _plt()
+    plt = pyplot()
     Y = data.outputs
     names = ("hitting angle alpha [deg]", "gain kappa (of v*)")[:Y.shape[1]]
     fig, axs = plt.subplots(1, len(names), figsize=(5.2 * len(names), 4.6), squeeze=False)
@@ -123,7 +123,7 @@ def strategy_figure(fld, strategies, rows, learner: str, out: str) -> None:
     first = next(r for r in rows if r["method"] == learner)
     ball = np.array([first["ball_x_m"], first["ball_y_m"]])
     hole = np.array([first["hole_x_m"], first["hole_y_m"]])
-    fig, (a1, a2) = _plt().subplots(1, 2, figsize=(13, 4.6),
+    fig, (a1, a2) = pyplot().subplots(1, 2, figsize=(13, 4.6),
                                      gridspec_kw={"width_ratios": [1, 1.4]})
     plot_strategies(fld, strategies.stroke, strategies, ball, hole, a1, a2,
                     chosen=first["strategy"])

@@ -1,10 +1,11 @@
 """Figures of a learned dynamical system: streamlines of a DS (2-D, or planes through the
-target of a higher-dimensional one) and the figure of ``seds-casadi fit`` (re-exported by
-:mod:`seds_casadi.app.plotting`)."""
+target of a higher-dimensional one) and the figure of ``seds-casadi fit``."""
 
 from __future__ import annotations
 
 import numpy as np
+
+from .plotting import pyplot
 
 __all__ = ["plot_streamlines", "plot_fit_views"]
 
@@ -38,9 +39,7 @@ def plot_streamlines(ds, demos=None, reproductions=None, ax=None, title=None,
     -------
     matplotlib Axes
     """
-    from .plotting import _plt
-
-    plt = _plt()
+    plt = pyplot()
     if ax is None:
         _, ax = plt.subplots(figsize=(5, 4.5))
     d = len(ds.target)
@@ -100,9 +99,7 @@ def plot_fit_views(ds, demos, reproductions=None, title: str = ""):
     -------
     matplotlib Figure
     """
-    from .plotting import _plt
-
-    plt = _plt()
+    plt = pyplot()
     d = len(ds.target)
     if d == 2:
         fig, ax = plt.subplots(figsize=(5.5, 5))

@@ -1,8 +1,9 @@
-"""Figures: streamlines of a learned DS, success maps (Fig. 4a), hitting-parameter models
-(Fig. 10 and 11) and fields with ball paths.
+"""Figures: success maps (Fig. 4a), hitting-parameter models (Fig. 10 and 11), fields with ball
+paths, the arm's frames and the strategies; the streamlines of a learned DS are in
+:mod:`seds_casadi.app.plot_ds`.
 
-Matplotlib is imported lazily with the non-interactive Agg backend when no display is set, so
-figures can be written on headless machines and in CI.
+Matplotlib is imported lazily (:func:`pyplot`) with the non-interactive Agg backend when no
+display is set, so figures can be written on headless machines and in CI.
 """
 
 from __future__ import annotations
@@ -11,16 +12,16 @@ import os
 
 import numpy as np
 
-__all__ = ["plot_streamlines", "plot_fit_views", "save_figure", "plot_success_map", "plot_regression_1d",
-           "plot_joint_gmm", "plot_field", "plot_arm_frames", "plot_strategies",
-           "STRATEGY_COLOURS"]
+__all__ = ["pyplot", "save_figure", "plot_success_map", "plot_regression_1d", "plot_joint_gmm",
+           "plot_field", "plot_arm_frames", "plot_strategies", "STRATEGY_COLOURS"]
 
 #: colours of strategies 0, 1, 2, ... in the strategy figures
 STRATEGY_COLOURS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#9467bd", "#8c564b", "#e377c2",
                     "#17becf", "#bcbd22")
 
 
-def _plt():
+def pyplot():
+    """``matplotlib.pyplot``, with the non-interactive Agg backend when no display is set."""
     import matplotlib
 
     if not os.environ.get("DISPLAY") and not os.environ.get("MPLBACKEND"):
@@ -30,9 +31,14 @@ def _plt():
     return plt
 
 
+# the old private name, still imported by app/replay.py and app/validate.py: removed by the
+# game-layer change (they import pyplot)
+_plt = pyplot
+
+
 def save_figure(fig, path: str | os.PathLike, dpi: int = 110) -> None:
     """Save a figure atomically (written to a temporary name, then renamed) and close it."""
-    plt = _plt()
+    plt = pyplot()
     path = os.fspath(path)
     root, ext = os.path.splitext(path)
     tmp = f"{root}.tmp-{os.getpid()}{ext}"
@@ -44,9 +50,6 @@ def save_figure(fig, path: str | os.PathLike, dpi: int = 110) -> None:
             os.unlink(tmp)
         plt.close(fig)
 
-
-# the DS figures live in plot_ds (they were defined here first)
-from .plot_ds import plot_fit_views, plot_streamlines  # noqa: E402
 
 
 def plot_success_map(success: np.ndarray, alphas, kappas, ax=None, title=None, chosen=None):
@@ -61,7 +64,7 @@ def plot_success_map(success: np.ndarray, alphas, kappas, ax=None, title=None, c
     chosen : (alpha, kappa), optional
         The teacher's choice, marked with a cross.
     """
-    plt = _plt()
+    plt = pyplot()
     from matplotlib.colors import ListedColormap
 
     if ax is None:
@@ -109,7 +112,7 @@ def plot_strategies(field, stroke, strategies, ball, hole, ax_map=None, ax_field
     from ..minigolf.ball import simulate_shots
     from ..minigolf.strategies import explore_situation
 
-    plt = _plt()
+    plt = pyplot()
     if ax_map is None or ax_field is None:
         _, (ax_map, ax_field) = plt.subplots(1, 2, figsize=(13, 4.2),
                                              gridspec_kw={"width_ratios": [1, 1.4]})
@@ -179,7 +182,7 @@ def plot_regression_1d(x, y, train, models: dict, ax_row=None, xlabel="s_y [m]",
     models : dict
         Title -> fitted model with ``predict(S, return_var=True)``.
     """
-    plt = _plt()
+    plt = pyplot()
     if ax_row is None:
         _, ax_row = plt.subplots(1, len(models), figsize=(5 * len(models), 3.6), sharey=True)
     ax_row = np.atleast_1d(ax_row)
@@ -217,7 +220,7 @@ def plot_joint_gmm(model, outputs: np.ndarray, ax_row=None, names=("alpha [deg]"
     outputs : array, shape (n, 2)
         The data set's outputs.
     """
-    plt = _plt()
+    plt = pyplot()
     (_, gm), = model.gmms_
     K = gm.n_components
     if ax_row is None:
@@ -275,7 +278,7 @@ def plot_field(field, ax=None, paths=None, sunk=None, ball=None, hole=None, n: i
     """
     from matplotlib.lines import Line2D
 
-    plt = _plt()
+    plt = pyplot()
     if ax is None:
         _, ax = plt.subplots(figsize=(8, 3.4))
     b = field.bounds
@@ -334,7 +337,7 @@ def plot_arm_frames(robot, qs, ax=None, ball=None, colors=None, alpha_min: float
     """
     import pinocchio as pin
 
-    plt = _plt()
+    plt = pyplot()
     if ax is None:
         fig = plt.figure(figsize=(6, 5))
         ax = fig.add_subplot(projection="3d")
@@ -364,9 +367,10 @@ def plot_arm_frames(robot, qs, ax=None, ball=None, colors=None, alpha_min: float
 
 
 def plot_1d_reproductions(ds, demos, reproductions, ax=None, title=None):
-    """A 1-D DS (where :func:`plot_streamlines` has no plane to draw): position against time
-    of the demonstrations (dots) and of the reproductions from their starts (lines)."""
-    plt = _plt()
+    """A 1-D DS (where :func:`~seds_casadi.app.plot_ds.plot_streamlines` has no plane to draw):
+    position against time of the demonstrations (dots) and of the reproductions from their
+    starts (lines)."""
+    plt = pyplot()
     if ax is None:
         _, ax = plt.subplots(figsize=(5, 4.5))
     dt = demos.estimated_dt()

@@ -15,6 +15,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..core._io import atomic_text
+from ..minigolf.hitting_data import HittingDataset
 from ..minigolf.parameters import make_model
 from ..minigolf.table1 import (
     TABLE1_FIELDS,
@@ -23,7 +24,6 @@ from ..minigolf.table1 import (
     run_table1,
     write_table1_csv,
 )
-from ..minigolf.teacher import HittingDataset
 from ._config import names_tuple, whole_number, with_overrides
 
 __all__ = ["table1_command", "Table1Config", "fig10", "fig11"]
@@ -111,8 +111,8 @@ def fig11(ds: HittingDataset, n_components: int = 3, ax_row=None):
 
 def _stroke(cfg: Table1Config):
     """The hitting motion's default hit, learned from the demonstrations."""
-    from ..core.demonstrations import load_demonstrations
-    from ..minigolf.teacher import Stroke
+    from ..core.demo_files import load_demonstrations
+    from ..minigolf.stroke import Stroke
     from ..motion.hitting import HittingMotion
     from ..motion.putting_demos import load_hitting_demos
 
@@ -146,9 +146,9 @@ def _teach(cfg: Table1Config, fields: list, stroke) -> dict:
 def _figures(datasets: dict, out: str) -> None:
     """Fig. 10 on a one-output data set along a slider (the double hill's if there), Fig. 11
     on a two-output one."""
-    from .plotting import _plt, save_figure
+    from .plotting import pyplot, save_figure
 
-    plt = _plt()
+    plt = pyplot()
     one = [(n, ds) for n, (f, ds) in datasets.items()
            if ds.outputs.shape[1] == 1 and f.situations.dim == 1]
     two = [ds for _, ds in datasets.values() if ds.outputs.shape[1] == 2]

@@ -7,11 +7,13 @@ package.
 """
 
 from .datasets import LASA_SHAPES, LASA_SINGLE_SHAPES, load_lasa
-from .demonstrations import Demonstrations, load_demonstrations, save_demonstrations
+from .demo_files import load_demonstrations, save_demonstrations
+from .demonstrations import Demonstrations
 from .errors import ConvergenceWarning, ModelFileError, SEDSError, SolverError, StabilityError
 from .model_selection import bic_n_components
+from .problem import SEDSProblem
 from .search import DemoSearchCV
-from .seds import SEDS, SEDSProblem
+from .seds import SEDS
 from .stable_ds import StableDS, certify
 from .strength import StrengthFactor, StrengthFactorLearner
 

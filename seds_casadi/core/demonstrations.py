@@ -19,9 +19,7 @@ from collections.abc import Sequence
 import numpy as np
 from scipy.ndimage import uniform_filter1d
 
-__all__ = ["Demonstrations", "load_demonstrations", "save_demonstrations"]
-
-# the file readers live in demo_files (one concept per module); re-exported here at the end
+__all__ = ["Demonstrations"]
 
 #: largest magnitude of a position or velocity accepted (squares must stay finite in the solve)
 MAX_MAGNITUDE = 1e100
@@ -388,4 +386,6 @@ class Demonstrations:
         return f"Demonstrations(n_demos={self.n_demos}, n_dims={self.n_dims}, samples={lens})"
 
 
-from .demo_files import load_demonstrations, save_demonstrations  # noqa: E402
+# the old import path of the file readers (they live in demo_files), still used by app/play.py:
+# removed by the game-layer change, and with it this import cycle
+from .demo_files import load_demonstrations  # noqa: E402, F401

@@ -8,11 +8,14 @@ hitting-parameter learners (``parameters``: GPR, GMR), the protocol of the paper
 :mod:`seds_casadi.core` and :mod:`seds_casadi.codegen`.
 """
 
-from .ball import ShotResult, impact, simulate_shots
+from .ball import impact, simulate_shots
+from .ball_physics import ShotResult
 from .fields import Field, field_names, load_field
+from .hitting_data import HittingDataset
 from .parameters import GMRModel, GPRModel, make_model
+from .stroke import Stroke
 from .table1 import run_table1
-from .teacher import HittingDataset, Stroke, Teacher, collect_dataset, success_map
+from .teacher import Teacher, collect_dataset, success_map
 
 __all__ = ["Field", "load_field", "field_names", "simulate_shots", "impact", "ShotResult",
            "Stroke", "Teacher", "HittingDataset", "collect_dataset", "success_map",

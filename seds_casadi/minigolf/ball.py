@@ -52,22 +52,18 @@ spline) are read by the compiled engine from a table of derivatives on a 1 cm gr
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from ..motion.golf import BALL_MASS, BALL_RADIUS, G
+from .ball_kernel import ball_kernel
+from .ball_physics import MU_SLIDE, STOP_SPEED, ShotResult
 from .fields import Field
 
-# BallKernel and ball_kernel, the compiled engine, live in ball_kernel (which imports this
-# module) and can be imported from here too (module __getattr__ below)
-__all__ = ["BALL_MASS", "BALL_RADIUS", "G", "impact", "capture_speed", "simulate_shots",
-           "ShotResult", "substeps"]
+__all__ = ["impact", "capture_speed", "simulate_shots", "substeps", "CLUB_MASS", "RESTITUTION"]
 
-MU_SLIDE = 0.2
+#: the impact model's effective club-head mass [kg] and restitution (a putter face)
 CLUB_MASS = 0.35
 RESTITUTION = 0.8
-STOP_SPEED = 0.005
 
 
 def impact(club_velocity, club_mass: float = CLUB_MASS, restitution: float = RESTITUTION,
@@ -99,36 +95,6 @@ def capture_speed(offset, hole_radius: float, ball_radius: float = BALL_RADIUS) 
     b = np.abs(np.asarray(offset, dtype=float))
     chord = 2 * np.sqrt(np.maximum(hole_radius**2 - b**2, 0.0))
     return chord / np.sqrt(2 * ball_radius / G)
-
-
-@dataclass
-class ShotResult:
-    """Outcome of simulated shots (arrays over shots).
-
-    Attributes
-    ----------
-    sunk, out, stopped : array of bool, shape (n,)
-    final_position : array, shape (n, 2)
-    time : array, shape (n,)
-        When the shot ended (sunk, out or stopped), or the time limit.
-    paths : list of array (T, 2) or None
-        Ball paths when requested.
-    wall_contacts : array of int, shape (n,)
-        How often each ball hit a wall.
-    """
-
-    sunk: np.ndarray
-    out: np.ndarray
-    stopped: np.ndarray
-    final_position: np.ndarray
-    time: np.ndarray
-    paths: list | None = None
-    wall_contacts: np.ndarray | None = None
-
-    @property
-    def success_rate(self) -> float:
-        """Fraction of shots sunk."""
-        return float(np.mean(self.sunk))
 
 
 def simulate_shots(field: Field, ball_xy, launch_velocity, dt: float = 0.01,
@@ -174,8 +140,6 @@ def simulate_shots(field: Field, ball_xy, launch_velocity, dt: float = 0.01,
     Hh = _holes(field, hole, len(P))
     dt = dt / substeps(field, U, dt)
     if engine == "compiled":
-        from .ball_kernel import ball_kernel
-
         return ball_kernel(field, dt).run(P, U, max_time, Hh)
     return _simulate_numpy(field, P, U, Hh, dt, max_time, record_paths)
 
@@ -357,11 +321,3 @@ def _boundary(field: Field, new_p, new_u, new_s) -> tuple[np.ndarray, np.ndarray
         new_u[hit, j] *= -field.wall_restitution
     return np.zeros(len(new_p), bool), hits
 
-
-def __getattr__(name: str):
-    # the compiled engine lives in ball_kernel (which imports this module's constants)
-    if name in ("BallKernel", "ball_kernel"):
-        from . import ball_kernel as _kernel_module
-
-        return getattr(_kernel_module, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

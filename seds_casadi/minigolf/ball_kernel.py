@@ -15,7 +15,8 @@ import json
 import casadi as ca
 import numpy as np
 
-from .ball import BALL_RADIUS, MU_SLIDE, STOP_SPEED, G, ShotResult
+from ..motion.golf import BALL_RADIUS, G
+from .ball_physics import MU_SLIDE, STOP_SPEED, ShotResult
 from .fields import Field
 
 __all__ = ["BallKernel", "ball_kernel", "ball_step", "STATE_SIZE"]

@@ -15,8 +15,8 @@ from __future__ import annotations
 import difflib
 import math
 
-__all__ = ["check_field_spec", "did_you_mean", "FIELD_KEYS", "SURFACE_KEYS", "MAX_EXTENT",
-           "MAX_HILLS", "MAX_BUMPS", "MAX_HEIGHTMAP_VALUES", "MAX_TABLE_POINTS",
+__all__ = ["check_field_spec", "did_you_mean", "FIELD_KEYS", "SURFACE_KEYS", "TEACHER_KEYS",
+           "MAX_EXTENT", "MAX_HILLS", "MAX_BUMPS", "MAX_HEIGHTMAP_VALUES", "MAX_TABLE_POINTS",
            "MAX_BUMP_EVALUATIONS", "MAX_FILE_BYTES"]
 
 #: the entries of a field file (``description``: free text, ignored)
@@ -27,6 +27,8 @@ SURFACE_KEYS = {"plane": ("slope_x", "slope_y"), "hills": ("hills",),
                 "arctan": ("height", "steepness", "y0", "axis"),
                 "rough": ("amplitude", "width", "bumps", "friction_variation", "seed"),
                 "heightmap": ("extent", "heights")}
+#: the entries of a field file's ``"teacher"``
+TEACHER_KEYS = ("strategy", "kappa", "alpha_range", "kappa_range", "banks")
 _HOLE_KEYS = ("x", "y", "radius")
 _HILL_KEYS = ("x", "y", "height", "width")
 #: a field's largest side [m]
@@ -85,8 +87,6 @@ def check_field_spec(spec: dict, source: str) -> None:
         if key in spec and not isinstance(spec[key], dict):
             raise ValueError(f"{source}: {key}: an object is needed, got {spec[key]!r}")
     if "teacher" in spec:
-        from .fields import TEACHER_KEYS
-
         _known(spec["teacher"], TEACHER_KEYS, f"{source}: teacher")
     extent = _extent(spec.get("bounds"), source)
     surface = spec.get("surface")

@@ -75,19 +75,17 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core._io import data_folder
-from .field_schema import MAX_FILE_BYTES, check_field_spec, did_you_mean
+from .field_schema import MAX_FILE_BYTES, TEACHER_KEYS, check_field_spec, did_you_mean
 from .situations import Situations
 from .surface import Surface
 
-__all__ = ["Field", "Surface", "Situations", "load_field", "field_names", "FIELDS_FOLDER",
-           "stimp_to_rho", "TEACHER_STRATEGIES", "TEACHER_KEYS"]
+__all__ = ["Field", "load_field", "field_names", "FIELDS_FOLDER", "stimp_to_rho",
+           "TEACHER_STRATEGIES"]
 
 #: folder of the shipped field files (the repository's ``fields/``, installed as package data)
 FIELDS_FOLDER = data_folder("seds_casadi._fields")
 #: the teacher's strategies a field file may name (``"teacher": {"strategy": ...}``)
 TEACHER_STRATEGIES = ("fixed_speed", "minimal_speed", "centre")
-#: the entries of a field file's ``"teacher"``
-TEACHER_KEYS = ("strategy", "kappa", "alpha_range", "kappa_range", "banks")
 _STIMP = np.array([[6.0, 0.131], [8.0, 0.0985], [10.0, 0.0785], [12.0, 0.0655]])
 
 

@@ -29,7 +29,7 @@ from ..core._random import sklearn_random_state
 from ..core.gmm import gmr_function, gmr_predict
 
 __all__ = ["GPRModel", "GMRModel", "make_model", "MODELS", "gpr_param_count",
-           "gmm_param_count", "sklearn_random_state"]
+           "gmm_param_count"]
 
 
 #: covariance floor of the GMMs, in units of each dimension's variance (the data are scaled

@@ -38,11 +38,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..motion.golf import BALL_RADIUS
 from .ball import simulate_shots
 from .fields import Field
 from .hitting_data import HittingDataset
 from .stroke import Stroke
-from .teacher import _runs, blurred
+from .teacher import blurred, true_runs
 
 _SCALE = np.array([10.0, 0.2])  # the units of the distance between shots (deg, kappa)
 
@@ -145,8 +146,6 @@ def route(field: Field, stroke: Stroke, ball, hole, alpha: float, kappa: float) 
     """The walls a shot's ball touches, in order: ``"direct"`` or a comma-separated list of
     ``"near"`` (x min), ``"far"`` (x max), ``"right"`` (y min) and ``"left"`` (y max; left and
     right looking along +x, the way the ball is hit)."""
-    from .ball import BALL_RADIUS
-
     r = simulate_shots(field, np.asarray(ball, float)[None],
                        stroke.launch_velocity(alpha, kappa), hole=hole, engine="numpy",
                        record_paths=True)
@@ -165,7 +164,7 @@ def _centre_alpha(field, stroke, ball, hole, kappa, guess, walls, lo, hi, step, 
     contacts and contain ``guess`` (else ``guess``)."""
     scan = np.arange(lo, hi + 0.5 * step, step)
     sunk, w = _outcomes(field, stroke, ball, hole, scan, [kappa], engine)
-    runs = _runs(sunk[0] & (w[0] == walls))
+    runs = true_runs(sunk[0] & (w[0] == walls))
     if not runs:
         return float(guess)
     mids = np.array([0.5 * (scan[a] + scan[b - 1]) for a, b in runs])

@@ -36,8 +36,8 @@ from ..core._io import atomic_csv
 from ._progress import progress_bar
 from .ball import simulate_shots
 from .fields import Field
+from .hitting_data import HittingDataset
 from .parameters import make_model
-from .teacher import HittingDataset
 
 __all__ = ["TRAINING_SETS", "MODELS_BY_OUTPUTS", "PAPER_TABLE1", "TABLE1_FIELDS", "CSV_COLUMNS",
            "run_table1", "format_table1", "write_table1_csv", "training_indices",

@@ -47,16 +47,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .ball import MU_SLIDE, G, simulate_shots
+from ..motion.golf import G
+from .ball import simulate_shots
+from .ball_physics import MU_SLIDE
 from .fields import TEACHER_STRATEGIES, Field, load_field
 from .hitting_data import HittingDataset, paper_situations
 from .stroke import Stroke
 
-__all__ = ["Stroke", "Teacher", "HittingDataset", "TeachingError", "success_map",
-           "paper_situations", "collect_dataset", "STRATEGIES", "FIXED_SPEED_OVERSHOOT",
+__all__ = ["Teacher", "TeachingError", "success_map", "collect_dataset", "FIXED_SPEED_OVERSHOOT",
            "default_strategy", "components"]
 
-STRATEGIES = TEACHER_STRATEGIES
 FIXED_SPEED_OVERSHOOT = 0.6  # m past the hole for the fixed-speed strategy's default gain
 DEFAULTS = {"strategy": "centre", "alpha_range": (-40.0, 40.0), "kappa_range": (0.8, 2.4),
             "banks": False}
@@ -112,7 +112,7 @@ def success_map(field: Field, stroke: Stroke, ball, hole, alphas, kappas,
     return ok.reshape(K.shape)
 
 
-def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+def true_runs(mask: np.ndarray) -> list[tuple[int, int]]:
     """(start, stop) index pairs of the True runs of a 1-D mask."""
     m = np.concatenate([[False], mask, [False]]).astype(int)
     d = np.diff(m)
@@ -192,8 +192,9 @@ class Teacher:
         for key in ("strategy", "alpha_range", "kappa_range", "banks", "kappa"):
             if getattr(self, key) is None:
                 setattr(self, key, settings.get(key))
-        if self.strategy not in STRATEGIES:
-            raise ValueError(f"unknown strategy {self.strategy!r}; valid: {', '.join(STRATEGIES)}")
+        if self.strategy not in TEACHER_STRATEGIES:
+            raise ValueError(f"unknown strategy {self.strategy!r}; valid: "
+                             f"{', '.join(TEACHER_STRATEGIES)}")
         lo, hi = self.alpha_range
         if not lo < hi:
             raise ValueError(f"alpha_range must be (low, high) with low < high, got "
@@ -328,13 +329,13 @@ class Teacher:
         need = np.deg2rad(self.min_width)
 
         def widest(kappa):
-            runs = _runs(self.map(ball, hole, scan, [kappa])[0])
+            runs = true_runs(self.map(ball, hole, scan, [kappa])[0])
             if not runs:
                 return 0.0, np.nan
             a, b = max(runs, key=lambda r: r[1] - r[0])
             return (b - a) * da / 10, 0.5 * (scan[a] + scan[b - 1])
 
-        grid_width = np.array([max(b - a for a, b in _runs(comp[r])) for r in rows]) * da
+        grid_width = np.array([max(b - a for a, b in true_runs(comp[r])) for r in rows]) * da
         i = int(rows[np.argmax(grid_width >= need)] if (grid_width >= need).any()
                 else rows[np.argmax(grid_width)])
         while i < rows[-1] and widest(kappas[i])[0] < need:
@@ -379,7 +380,7 @@ class Teacher:
         lo, hi = max(lo, alphas[0] - 10 * step), min(hi, alphas[-1] + 10 * step)
         scan = np.arange(lo, hi + 0.5 * step, step)
         row = self.map(ball, hole, scan, [kappa])[0]
-        runs = _runs(row)
+        runs = true_runs(row)
         if not runs:
             return np.nan
         mids = np.array([0.5 * (scan[a] + scan[b - 1]) for a, b in runs])

@@ -20,7 +20,8 @@ import os
 import numpy as np
 
 from ..core._io import data_folder
-from ..core.demonstrations import Demonstrations, load_demonstrations
+from ..core.demo_files import load_demonstrations
+from ..core.demonstrations import Demonstrations
 
 __all__ = ["generate_putting_demos", "load_hitting_demos", "HITTING_DEMOS_FILE"]
 

@@ -28,8 +28,10 @@ from exudyn.utilities import (
     ObjectConnectorCartesianSpringDamper,
 )
 
-from ..minigolf.ball import BALL_MASS, BALL_RADIUS, CLUB_MASS, MU_SLIDE, RESTITUTION, G
+from ..minigolf.ball import CLUB_MASS, RESTITUTION
+from ..minigolf.ball_physics import MU_SLIDE
 from ..minigolf.fields import Field
+from ..motion.golf import BALL_MASS, BALL_RADIUS, G
 from .arm import ExudynArm, add_arm
 from .mesh import field_mesh, wall_mesh
 

@@ -18,8 +18,10 @@ from dataclasses import dataclass, field
 import exudyn as exu
 import numpy as np
 
-from ..minigolf.ball import BALL_RADIUS, RESTITUTION, STOP_SPEED, capture_speed
+from ..minigolf.ball import RESTITUTION, capture_speed
+from ..minigolf.ball_physics import STOP_SPEED
 from ..minigolf.fields import Field
+from ..motion.golf import BALL_RADIUS
 from .scene import HEAD_RADIUS, Scene, build_scene
 
 __all__ = ["ExudynShot", "simulate_shot_exudyn", "ShotMonitor", "ROLL_AFTER"]
