@@ -17,7 +17,8 @@ ALLOWED = {
     "minigolf": {"motion", "core", "codegen"},
     "robots": {"motion", "core", "codegen"},
     "sim": {"robots", "minigolf", "motion", "core", "codegen"},
-    "app": {"sim", "robots", "minigolf", "motion", "core", "codegen"},
+    "game": {"sim", "robots", "minigolf", "motion", "core", "codegen"},
+    "app": {"game", "sim", "robots", "minigolf", "motion", "core", "codegen"},
 }
 
 

@@ -15,12 +15,14 @@ pytestmark = pytest.mark.slow
 pytest.importorskip("pinocchio")
 
 from seds_casadi.app.cli import build_parser  # noqa: E402
-from seds_casadi.app.play import PlayConfig, play_shot  # noqa: E402
+from seds_casadi.app.play import PlayConfig  # noqa: E402
 from seds_casadi.app.replay import (  # noqa: E402
     REPLAY_COLOURS,
     replay_shot,
     write_replay,
 )
+from seds_casadi.game.scene import Scene  # noqa: E402
+from seds_casadi.game.shot import Shot, play_shot  # noqa: E402
 from seds_casadi.minigolf.fields import load_field  # noqa: E402
 from seds_casadi.minigolf.stroke import Stroke  # noqa: E402
 from seds_casadi.motion import HittingMotion, load_hitting_demos  # noqa: E402
@@ -34,21 +36,24 @@ def motion_dir(tmp_path_factory):
     return str(folder), motion
 
 
-def _task(motion_dir, robot="wam", ball=(0.1, -0.2), shot=0):
+def _scene(motion_dir, robot="wam"):
     folder, motion = motion_dir
+    return Scene(robot, load_field("arctan"), motion, motion_folder=folder)
+
+
+def _shot(motion_dir, ball=(0.1, -0.2), index=0):
+    _, motion = motion_dir
     fld = load_field("arctan")
     s = np.asarray(fld.hole) - np.asarray(ball)
     alpha = float(Stroke.from_motion(motion).aim(s[None])[0])   # straight at the hole
-    return {"method": "gpr", "shot": shot, "ball": list(ball), "hole": list(fld.hole),
-            "alpha": alpha, "kappa": 1.1, "robot": robot, "field": "arctan",
-            "field_spec": fld.spec, "motion": folder}
+    return Shot(ball, fld.hole, alpha, 1.1, method="gpr", index=index)
 
 
 @pytest.fixture(scope="module")
 def written(motion_dir, tmp_path_factory):
     out = tmp_path_factory.mktemp("replay")
-    tasks = [_task(motion_dir), _task(motion_dir, ball=(0.2, 0.3), shot=1)]
-    return out, tasks, write_replay(tasks, str(out), max_time=4.0)
+    shots = [_shot(motion_dir), _shot(motion_dir, ball=(0.2, 0.3), index=1)]
+    return out, shots, write_replay(_scene(motion_dir), shots, str(out), max_time=4.0)
 
 
 def _segment_lengths(chain):
@@ -56,11 +61,13 @@ def _segment_lengths(chain):
 
 
 def test_a_replay_is_the_shot_play_played(motion_dir):
-    task = _task(motion_dir)
-    row = play_shot(task)
-    r = replay_shot(task)
-    assert r.row["sunk"] == row["sunk"] and r.row["hit"] and row["hit"]
-    assert r.row["final_x_m"] == pytest.approx(row["final_x_m"], abs=1e-12)
+    shot = _shot(motion_dir)
+    played = play_shot(_scene(motion_dir), shot)
+    r = replay_shot(_scene(motion_dir), shot)
+    assert r.row["sunk"] == played.sunk and r.row["hit"] and played.hit
+    assert r.row["final_x_m"] == pytest.approx(played.final_position[0], abs=1e-12)
+    row = {"final_x_m": played.final_position[0], "final_y_m": played.final_position[1]}
+    task = {"ball": shot.ball}
     # the ball waits at its place until the hit, then follows the ball model's path
     before = r.t < r.hit_time
     assert before.any() and (~before).any()
@@ -78,7 +85,7 @@ def test_a_replay_is_the_shot_play_played(motion_dir):
 
 
 def test_the_html_page_is_self_contained_and_carries_every_shot(written):
-    out, tasks, res = written
+    out, shots, res = written
     page = open(res["html"], encoding="utf-8").read()
     assert oct(os.stat(res["html"]).st_mode & 0o777) == oct(0o666 & ~_umask())
     # no network: no external script, style, image or link
@@ -95,7 +102,7 @@ def test_the_html_page_is_self_contained_and_carries_every_shot(written):
 def test_the_gifs_show_the_robot(written):
     from PIL import Image
 
-    out, tasks, res = written
+    out, shots, res = written
     assert [os.path.basename(g) for g in res["gifs"]] == ["replay_gpr_0.gif", "replay_gpr_1.gif"]
     with Image.open(res["gifs"][0]) as im:
         assert im.n_frames > 10
@@ -126,7 +133,7 @@ def _chromium():
 def test_the_page_draws_the_robot_and_the_field_in_headless_chromium(written, tmp_path):
     from PIL import Image
 
-    out, tasks, res = written
+    out, shots, res = written
     shot = tmp_path / "replay.png"
     cmd = [_chromium(), "--headless", "--no-sandbox", "--disable-gpu",
            "--disable-background-networking", "--disable-component-update", "--disable-sync",
@@ -147,14 +154,13 @@ def test_the_page_draws_the_robot_and_the_field_in_headless_chromium(written, tm
 
 def test_bad_replay_requests_are_clear_errors(motion_dir, tmp_path):
     with pytest.raises(ValueError, match="no shots"):
-        write_replay([], str(tmp_path))
+        write_replay(_scene(motion_dir), [], str(tmp_path))
     with pytest.raises(ValueError, match="fps"):
-        replay_shot(_task(motion_dir), fps=0)
+        replay_shot(_scene(motion_dir), _shot(motion_dir), fps=0)
     with pytest.raises(ValueError, match="replay"):
         PlayConfig(replay=-1)
-    bad = dict(_task(motion_dir), robot="no_such_arm")
     with pytest.raises(ValueError, match="unknown robot 'no_such_arm'; known: wam, katana"):
-        write_replay([bad], str(tmp_path))
+        write_replay(_scene(motion_dir, "no_such_arm"), [_shot(motion_dir)], str(tmp_path))
     assert not (tmp_path / "replay.html").exists()
 
 

@@ -35,29 +35,39 @@ import time
 from dataclasses import dataclass, replace
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from ..core._io import atomic_csv, atomic_text
+from ..core.demonstrations import load_demonstrations
+from ..game.launch import calibrate_launch
+from ..game.scene import Scene
+from ..game.shot import Shot, play_round, play_shot
 from ..minigolf._progress import progress_bar
+from ..minigolf.fields import load_field
+from ..minigolf.hitting_data import HittingDataset, paper_situations
+from ..minigolf.parameters import make_model
+from ..minigolf.strategies import StrategySet, explore
+from ..minigolf.strategy_choice import StrategyChoice
+from ..minigolf.stroke import Stroke
+from ..minigolf.table1 import N_COMPONENTS, training_indices
+from ..minigolf.teacher import DEFAULTS
+from ..motion.hitting import HittingMotion
+from ..motion.putting_demos import load_hitting_demos
+from ..robots.models import load_robot, robot_names
 from ._config import names_tuple, whole_number, with_overrides
+from .executors import open_executor
+from .play_figures import play_figures, strategy_figure
 from .reach import check_reach, fastest_gain
+from .replay import write_replay
+from .shot_table import SHOT_COLUMNS, shot_row
+from .teacher_cache import cached_dataset
 
-__all__ = ["play", "play_shot", "PlayConfig", "SHOT_COLUMNS", "LEARNERS"]
+__all__ = ["play", "PlayConfig", "LEARNERS"]
 
 _LOG = logging.getLogger(__name__)
 
-#: columns of ``shots.csv``; a unit ends the name (m, deg), dimensionless ones have none
-#: (kappa, the gain; speed_error, relative to the commanded speed). direction_error_deg is the
-#: club velocity's error at the hit, launch_direction_error_deg the club face's (the ball
-#: leaves along the face's normal); within_limits: no joint over a speed, torque or position
-#: limit during the swing
-SHOT_COLUMNS = ("method", "shot", "ball_x_m", "ball_y_m", "hole_x_m", "hole_y_m", "alpha_deg",
-                "kappa", "hit", "sunk", "direction_error_deg", "speed_error",
-                "launch_direction_error_deg", "within_limits", "final_x_m", "final_y_m",
-                "sunk_exudyn", "strategy")
 LEARNERS = ("gpr", "gmr")
 _VALID_LEARNERS = ("gpr", "gmr", "sep_gmr")
-
-_MOTIONS: dict = {}
 
 
 @dataclass(frozen=True)
@@ -156,64 +166,6 @@ class PlayConfig:
         return replace(self, shots=min(self.shots, 3), validate_shots=min(self.validate_shots, 1))
 
 
-def _motion(folder):
-    from ..motion.hitting import HittingMotion
-
-    if isinstance(folder, HittingMotion):
-        return folder
-    if folder not in _MOTIONS:
-        _MOTIONS[folder] = HittingMotion.load(folder)
-    return _MOTIONS[folder]
-
-
-def play_shot(task: dict) -> dict:
-    """One shot: the robot's swing on Pinocchio, then the ball model (a picklable task).
-
-    ``task`` has ``method, shot, ball (2,), hole (2,), alpha [rad], kappa, robot, field (name),
-    field_spec (dict), motion`` (a :class:`~seds_casadi.motion.HittingMotion` or the folder it
-    was saved in). Returns the shot's row of ``shots.csv`` (:data:`SHOT_COLUMNS`: the angle
-    in degrees) plus the ball's ``path`` when the robot hit it, and ``error`` when the swing
-    could not start."""
-    from ..minigolf.ball import BALL_RADIUS, impact, simulate_shots
-    from ..minigolf.fields import Field
-    from ..robots.control import place_robot, simulate_swing
-
-    field = Field.from_dict(task["field_spec"], source=task["field"])
-    motion = _motion(task["motion"])
-    ball, hole = np.asarray(task["ball"]), np.asarray(task["hole"])
-    robot = place_robot(task["robot"], ball, field)
-    z = float(field.surface.height(ball[None])[0]) + BALL_RADIUS
-    row = {"method": task["method"], "shot": task["shot"], "strategy": task.get("strategy", ""),
-           "ball_x_m": ball[0],
-           "ball_y_m": ball[1], "hole_x_m": hole[0], "hole_y_m": hole[1],
-           "alpha_deg": float(np.rad2deg(task["alpha"])), "kappa": task["kappa"], "hit": False,
-           "sunk": False, "direction_error_deg": np.nan, "speed_error": np.nan,
-           "launch_direction_error_deg": np.nan, "within_limits": "",
-           "final_x_m": ball[0], "final_y_m": ball[1], "sunk_exudyn": ""}
-    try:
-        swing = simulate_swing(robot, motion, np.array([ball[0], ball[1], z]), task["alpha"],
-                               task["kappa"])
-    except ValueError as exc:  # out of reach, no start configuration: a miss, with the reason
-        row["error"] = str(exc)
-        return row
-    row["within_limits"] = swing.within_limits
-    if not swing.hit:
-        if task.get("keep_swing"):
-            row["swing"] = swing
-        return row
-    launch = impact(swing.hit_velocity[None], face_normal=swing.face_normal[None],
-                    club_mass=swing.effective_mass)
-    res = simulate_shots(field, ball[None], launch, hole=hole, engine="numpy", record_paths=True)
-    row.update(hit=True, sunk=bool(res.sunk[0]),
-               direction_error_deg=swing.direction_error_deg, speed_error=swing.speed_error,
-               launch_direction_error_deg=swing.face_error_deg,
-               final_x_m=float(res.final_position[0, 0]),
-               final_y_m=float(res.final_position[0, 1]), path=res.paths[0])
-    if task.get("keep_swing"):  # for a replay (seds_casadi.app.replay)
-        row["swing"] = swing
-    return row
-
-
 def _situations(field, n: int, rng):
     """Random situations (balls, holes) drawn from the field's declaration."""
     return field.situations.sample(n, rng)
@@ -221,9 +173,6 @@ def _situations(field, n: int, rng):
 
 def _reuse_models(models: str, fld, strategies=None):
     """Steps 1-2 from an earlier run's ``models/`` folder."""
-    from ..minigolf.teacher import HittingDataset
-    from ..motion.hitting import HittingMotion
-
     src_motion = os.path.join(models, "motion")
     src_data = os.path.join(models, f"dataset_{fld.name}.npz")
     for p in (os.path.join(src_motion, "stable_ds.npz"), src_data):
@@ -236,8 +185,6 @@ def _reuse_models(models: str, fld, strategies=None):
     _LOG.info("reused the hitting motion and %d good shots from %s", len(data), models)
     if not strategies:
         return motion, data, None
-    from ..minigolf.strategies import StrategySet
-
     src = os.path.join(models, f"strategies_{fld.name}.npz")
     if not os.path.exists(src):
         raise ValueError(f"--models {models}: no strategies_{fld.name}.npz there; run play "
@@ -247,14 +194,29 @@ def _reuse_models(models: str, fld, strategies=None):
     return motion, data, ss
 
 
-def _learn_and_teach(cfg: PlayConfig, fld, times: dict):
-    """Steps 1-2: the hitting motion from the demonstrations, the teacher's good shots."""
-    from ..core.demonstrations import load_demonstrations
-    from ..minigolf.teacher import Stroke, paper_situations
-    from ..motion.hitting import HittingMotion
-    from ..motion.putting_demos import load_hitting_demos
-    from .teacher_cache import cached_dataset
+def _teacher_ranges(fld) -> tuple[tuple, tuple]:
+    """The teacher's (alpha_range [deg], kappa_range) for the field."""
+    return (tuple(fld.teacher.get("alpha_range", DEFAULTS["alpha_range"])),
+            tuple(fld.teacher.get("kappa_range", DEFAULTS["kappa_range"])))
 
+
+def _measure_launch(cfg: PlayConfig, scene: Scene, times: dict) -> Scene:
+    """The robot's launch over the teacher's (alpha, kappa) ranges
+    (:func:`~seds_casadi.game.launch.calibrate_launch`): the scene the teacher searches."""
+    t = time.perf_counter()
+    arange, krange = _teacher_ranges(scene.field)
+    table = calibrate_launch(scene, arange, krange)
+    times["the robot's launch"] = time.perf_counter() - t
+    f = table.speed_factor[table.speed_factor > 0]
+    _LOG.info("the %s's launch: %.2f-%.2f x the commanded club speed over alpha %g..%g deg, "
+              "kappa %g..%g (%.1f s)", cfg.robot, f.min(), f.max(), *arange, *krange,
+              times["the robot's launch"])
+    return scene.with_launch(table)
+
+
+def _learn_and_teach(cfg: PlayConfig, fld, times: dict):
+    """Steps 1-2: the hitting motion from the demonstrations, the robot's launch, the
+    teacher's good shots on that launch."""
     t0 = time.perf_counter()
     _LOG.info("learning the hitting motion (SEDS + GMR) ...")
     d = load_demonstrations(cfg.demos) if cfg.demos else load_hitting_demos()
@@ -264,13 +226,14 @@ def _learn_and_teach(cfg: PlayConfig, fld, times: dict):
               times["hitting motion (SEDS + GMR)"])
     t1 = time.perf_counter()
     _check_declared_reach(cfg.robot, fld, motion)
-    stroke = Stroke.from_motion(motion)
     fastest = fastest_gain(cfg.robot, fld, motion)
     _LOG.info("the %s swings within 2 %% of the commanded speed up to kappa %.2f (%.2f m/s)",
               cfg.robot, fastest, fastest * motion.hitting_speed)
+    times["reach and speed checks"] = time.perf_counter() - t1
+    scene = _measure_launch(cfg, Scene(cfg.robot, fld, motion), times)
+    stroke = scene.stroke
+    t1 = time.perf_counter()
     if cfg.strategies is not None:
-        from ..minigolf.strategies import explore
-
         # a strategy the robot cannot swing fast enough for is none of its strategies
         lo, hi = fld.teacher.get("kappa_range", (0.6, 2.4))
         ss = explore(fld, stroke, *paper_situations(fld), n_strategies=cfg.strategies,
@@ -299,8 +262,6 @@ def _learn_and_teach(cfg: PlayConfig, fld, times: dict):
 def _check_declared_reach(robot: str, fld, motion) -> None:
     """Before teaching: the robot reaches the declared ball positions (a 3 x 3 spread over a
     region, the ends and middle of a slider), hitting straight at the declared holes."""
-    from ..minigolf.stroke import Stroke
-
     balls = fld.situations.ball.design(9)
     holes = fld.situations.hole.design(3)
     B = np.repeat(balls, len(holes), axis=0)
@@ -313,12 +274,7 @@ def _fit_learners(data, learners, train_size=None, strategies=None) -> dict:
     """Step 3: each hitting-parameter learner on the teacher's data set (or ``train_size``
     equally spaced situations of it); with ``strategies``, a
     :class:`~seds_casadi.minigolf.strategy_choice.StrategyChoice` per learner."""
-    from ..minigolf.parameters import make_model
-    from ..minigolf.table1 import N_COMPONENTS, training_indices
-
     if strategies is not None:
-        from ..minigolf.strategy_choice import StrategyChoice
-
         return {m: StrategyChoice(m, n_components=N_COMPONENTS[2]).fit(strategies)
                 for m in learners}
 
@@ -331,12 +287,9 @@ def _fit_learners(data, learners, train_size=None, strategies=None) -> dict:
             for m in learners}
 
 
-def _round_tasks(cfg: PlayConfig, fld, data, fitted: dict, balls, holes,
-                 motion_dir: str) -> list[dict]:
-    """Step 4's tasks: each learner's (alpha, kappa) for each situation (:func:`play_shot`)."""
-    from ..minigolf.strategy_choice import StrategyChoice
-
-    tasks = []
+def _round_shots(data, fitted: dict, balls, holes) -> list[Shot]:
+    """Step 4's shots: each learner's (alpha, kappa) for each situation."""
+    shots = []
     for m, model in fitted.items():
         if isinstance(model, StrategyChoice):
             pred, labels, _ = model.predict(holes - balls, return_choice=True)
@@ -344,36 +297,28 @@ def _round_tasks(cfg: PlayConfig, fld, data, fitted: dict, balls, holes,
             pred, labels = model.predict(holes - balls), [""] * len(balls)
         for i in range(len(balls)):
             kappa = float(pred[i, 1]) if pred.shape[1] > 1 else float(data.kappa[0])
-            tasks.append({"method": m, "shot": i, "strategy": labels[i],
-                          "ball": balls[i].tolist(),
-                          "hole": holes[i].tolist(), "alpha": float(np.deg2rad(pred[i, 0])),
-                          "kappa": kappa, "robot": cfg.robot, "field": fld.name,
-                          "field_spec": fld.spec, "motion": os.path.abspath(motion_dir)})
-    return tasks
+            shots.append(Shot(balls[i], holes[i], float(np.deg2rad(pred[i, 0])), kappa,
+                              method=m, index=i, strategy=str(labels[i])))
+    return shots
 
 
-def _play_round(cfg: PlayConfig, tasks: list[dict], ex) -> list[dict]:
-    """Step 4: the tasks on this process, local workers or Dask; rows in the tasks' order."""
-    _LOG.info("playing %d shots ...", len(tasks))
-    futures = [ex.submit(play_shot, t) for t in tasks]
-    it = progress_bar(futures, cfg.progress, desc=f"playing {len(tasks)} shots", unit="shot")
-    return [f.result() for f in it]
+def _play_round(cfg: PlayConfig, scene: Scene, shots: list[Shot], ex) -> list[dict]:
+    """Step 4: the shots on this process, local workers or Dask (each worker loads the scene
+    once); rows in the shots' order."""
+    _LOG.info("playing %d shots ...", len(shots))
+    results = play_round(scene, shots, executor=ex, progress=lambda it: progress_bar(
+        it, cfg.progress, desc=f"playing {len(shots)} shots", unit="shot"))
+    return [shot_row(r) for r in results]
 
 
-def _check_in_exudyn(cfg: PlayConfig, fld, motion, tasks: list[dict], rows: list[dict]) -> None:
+def _check_in_exudyn(cfg: PlayConfig, scene: Scene, shots: list[Shot],
+                     rows: list[dict]) -> None:
     """Step 5: the first learner's first hits again in exudyn (``sunk_exudyn`` of their rows)."""
-    from ..robots.control import place_robot
-    from ..sim.shot import simulate_shot_exudyn
-
-    checked = [(t, r) for t, r in zip(tasks, rows) if r["method"] == cfg.learners[0] and r["hit"]]
-    for i, (task, row) in enumerate(checked[:cfg.validate_shots]):
+    checked = [(s, r) for s, r in zip(shots, rows) if r["method"] == cfg.learners[0] and r["hit"]]
+    for i, (shot, row) in enumerate(checked[:cfg.validate_shots]):
         _LOG.info("  exudyn %d/%d: %s shot %d", i + 1, min(len(checked), cfg.validate_shots),
-                  task["method"], task["shot"])
-        ball = np.asarray(task["ball"])
-        ex_shot = simulate_shot_exudyn(fld, ball, hole=task["hole"], arm={
-            "robot": place_robot(cfg.robot, ball, fld), "motion": motion,
-            "alpha": task["alpha"], "kappa": task["kappa"]})
-        row["sunk_exudyn"] = bool(ex_shot.sunk)
+                  shot.method, shot.index)
+        row["sunk_exudyn"] = play_shot(scene, shot, engine="exudyn").sunk
 
 
 def _summary(cfg: PlayConfig, fld, rows: list[dict], n_situations: int, times: dict,
@@ -424,17 +369,12 @@ def play(config: PlayConfig | None = None, **overrides) -> dict:
         ``success`` (fraction sunk per learner), ``times`` (seconds per stage) and ``rows``
         (the rows of ``shots.csv``, with the ball paths).
     """
-    from ..minigolf.fields import load_field
-    from ..robots.models import load_robot, robot_names
-
     started = time.perf_counter()
     cfg = with_overrides(PlayConfig, config, overrides).effective()
     if cfg.robot not in robot_names() and ".urdf" not in str(cfg.robot):
         raise ValueError(f"unknown robot {cfg.robot!r}; known: {', '.join(robot_names())}")
     fld = load_field(cfg.field)
     load_robot(cfg.robot)  # a robot that does not load fails before any work
-    from .executors import open_executor
-
     # the executor (a Dask scheduler too) is opened and checked before the long work starts
     with open_executor(cfg.workers, cfg.dask) as ex:
         return _play(cfg, fld, ex, started)
@@ -452,13 +392,13 @@ def _play(cfg: PlayConfig, fld, ex, started: float) -> dict:
     check_reach(cfg.robot, fld, data.ball, data.alpha, motion.hitting_direction,
                 "situations the teacher taught")
     motion.save(motion_dir)
+    # the scene every shot is played in (workers load it once each from the saved motion)
+    scene = Scene(cfg.robot, fld, motion, data.stroke.launch_table, motion_dir)
     data.save(os.path.join(cfg.out, "models", f"dataset_{fld.name}.npz"))
     if strategies is not None:
         strategies.save(os.path.join(cfg.out, "models", f"strategies_{fld.name}.npz"))
     t2 = time.perf_counter()
     _LOG.info("fitting the hitting-parameter models (%s) ...", ", ".join(cfg.learners))
-    from threadpoolctl import threadpool_limits
-
     # one BLAS thread: on busy cores OpenBLAS's threads on these small matrices made GPR's
     # fit 20x slower (7.5 s against 0.36 s for arctan's 56 shots on 2 loaded cores)
     with threadpool_limits(1):
@@ -466,25 +406,25 @@ def _play(cfg: PlayConfig, fld, ex, started: float) -> dict:
     times["hitting-parameter models"] = time.perf_counter() - t2
     t3 = time.perf_counter()
     balls, holes = _situations(fld, cfg.shots, rng)
-    tasks = _round_tasks(cfg, fld, data, fitted, balls, holes, motion_dir)
-    rows = _play_round(cfg, tasks, ex)
+    shots = _round_shots(data, fitted, balls, holes)
+    rows = _play_round(cfg, scene, shots, ex)
     times["round (robot + ball model)"] = time.perf_counter() - t3
     if cfg.validate_shots > 0:
         t4 = time.perf_counter()
         _LOG.info("checking %d shots again in exudyn ...", cfg.validate_shots)
-        _check_in_exudyn(cfg, fld, motion, tasks, rows)
+        _check_in_exudyn(cfg, scene, shots, rows)
         times["exudyn validation"] = time.perf_counter() - t4
-    rates = _write_outputs(cfg, fld, (motion, data, fitted, strategies), tasks, rows,
+    rates = _write_outputs(cfg, scene, (data, fitted, strategies), shots, rows,
                            len(balls), times, started)
     return {"success": rates, "times": times, "rows": rows}
 
 
-def _write_outputs(cfg: PlayConfig, fld, learned: tuple, tasks: list[dict], rows: list[dict],
-                   n_situations: int, times: dict, started: float | None = None) -> dict:
+def _write_outputs(cfg: PlayConfig, scene: Scene, learned: tuple, shots: list[Shot],
+                   rows: list[dict], n_situations: int, times: dict,
+                   started: float | None = None) -> dict:
     """``shots.csv``, the figures, the replay and ``summary.txt`` (with every stage's time)."""
-    from .play_figures import play_figures, strategy_figure
-
-    motion, data, fitted, strategies = learned
+    fld, motion = scene.field, scene.motion
+    data, fitted, strategies = learned
     atomic_csv(os.path.join(cfg.out, "shots.csv"), SHOT_COLUMNS,
                ([r[c] for c in SHOT_COLUMNS] for r in rows))
     t = time.perf_counter()
@@ -494,11 +434,9 @@ def _write_outputs(cfg: PlayConfig, fld, learned: tuple, tasks: list[dict], rows
         strategy_figure(fld, strategies, rows, cfg.learners[0], cfg.out)
     times["figures"] = time.perf_counter() - t
     if cfg.replay:
-        from .replay import write_replay
-
         t = time.perf_counter()
-        mine = [t for t in tasks if t["method"] == cfg.learners[0]][:cfg.replay]
-        write_replay(mine, cfg.out, progress=_LOG.info)
+        mine = [s for s in shots if s.method == cfg.learners[0]][:cfg.replay]
+        write_replay(scene, mine, cfg.out, progress=_LOG.info)
         times["replay"] = time.perf_counter() - t
         _LOG.info("wrote the replay of %d shots: %s and GIFs (%.1f s)", len(mine),
                   os.path.join(cfg.out, "replay.html"), times["replay"])

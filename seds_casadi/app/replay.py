@@ -1,7 +1,8 @@
 """Replays of shots: the robot's swing and the ball rolling on the field, to watch.
 
-A shot of :func:`seds_casadi.app.play.play_shot` is simulated again (the same task gives the
-same swing: the 500 Hz controller on Pinocchio's forward dynamics, then the ball model) and
+A shot is played again by :func:`seds_casadi.game.shot.play_shot` (the same scene and shot
+give the same swing: the 500 Hz controller on Pinocchio's forward dynamics, then the ball
+model) and
 kept as a :class:`Replay`: per frame, the arm's chain (base, each joint's origin, the flange, the
 club head, from Pinocchio's forward kinematics at the simulated configurations), the club
 head's face and the ball on the field's surface. :func:`write_replay` writes
@@ -23,6 +24,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core._io import _umask, atomic_text, data_folder
+from ..game.scene import Scene
+from ..game.shot import Shot, play_shot
+from ..minigolf.ball import BALL_RADIUS
+from .shot_table import shot_row
 
 __all__ = ["Replay", "replay_shot", "write_replay", "write_replay_html", "write_replay_gif",
            "REPLAY_COLOURS"]
@@ -53,7 +58,7 @@ class Replay:
     label : str
         The shot's name (learner, number, result).
     row : dict
-        The shot's row of ``shots.csv`` (:data:`seds_casadi.app.play.SHOT_COLUMNS`).
+        The shot's row of ``shots.csv`` (:data:`seds_casadi.app.shot_table.SHOT_COLUMNS`).
     field, robot : str
         Their names.
     """
@@ -88,14 +93,14 @@ def _chain(robot, q) -> tuple[np.ndarray, np.ndarray]:
     return np.array(pts), np.array([head - across, head + across])
 
 
-def replay_shot(task: dict, fps: float = 25.0, max_time: float = 8.0) -> Replay:
-    """Simulate one shot of ``play`` again and keep it frame by frame.
+def replay_shot(scene: Scene, shot: Shot, fps: float = 25.0, max_time: float = 8.0) -> Replay:
+    """Play one shot again and keep it frame by frame.
 
     Parameters
     ----------
-    task : dict
-        A task of :func:`seds_casadi.app.play.play_shot` (``method, shot, ball, hole, alpha
-        [rad], kappa, robot, field, field_spec, motion``).
+    scene : Scene
+        The robot, field and motion (:class:`~seds_casadi.game.scene.Scene`).
+    shot : Shot
     fps : float
         Frames per second of simulated time.
     max_time : float
@@ -105,21 +110,16 @@ def replay_shot(task: dict, fps: float = 25.0, max_time: float = 8.0) -> Replay:
     -------
     Replay
     """
-    from ..minigolf.ball import BALL_RADIUS
-    from ..minigolf.fields import Field
-    from ..robots.control import place_robot
-    from .play import play_shot
-
     if not (np.isfinite(fps) and fps > 0 and np.isfinite(max_time) and max_time > 0):
         raise ValueError(f"fps and max_time must be positive, got {fps!r} and {max_time!r}")
-    row = play_shot(dict(task, keep_swing=True))
-    swing = row.pop("swing", None)
+    res = play_shot(scene, shot, keep_swing=True)
+    swing = res.swing
     if swing is None:
-        raise ValueError(f"shot {task.get('shot')} of {task.get('method')}: the swing could not "
-                         f"start ({row.get('error', 'no swing')}); nothing to replay")
-    fld = Field.from_dict(task["field_spec"], source=task["field"])
-    ball0 = np.asarray(task["ball"], float)
-    robot = place_robot(task["robot"], ball0, fld)
+        raise ValueError(f"shot {shot.index} of {shot.method}: {res.reason}; nothing to replay")
+    fld = scene.field
+    ball0 = shot.ball
+    robot = scene.robot_at(ball0)
+    row = shot_row(res)
     path = np.asarray(row.pop("path", ball0[None]), float)
     hit_t = swing.hit_time if swing.hit else np.inf
     roll_end = hit_t + 0.01 * (len(path) - 1) + 0.3 if swing.hit else swing.t[-1]
@@ -133,10 +133,10 @@ def replay_shot(task: dict, fps: float = 25.0, max_time: float = 8.0) -> Replay:
     z = fld.surface.height(xy) + BALL_RADIUS
     if row["sunk"]:   # in the hole once it has stopped there
         z = np.where(k_ball == len(path) - 1, z - 2 * BALL_RADIUS, z)
-    res = "sunk" if row["sunk"] else ("missed" if row["hit"] else "no hit")
+    outcome = "sunk" if row["sunk"] else ("missed" if row["hit"] else "no hit")
     return Replay(t, np.array(chains), np.array(heads), np.column_stack([xy, z]),
-                  len(chains[0]) - 2, float(swing.hit_time), f"{task['method']} shot "
-                  f"{task['shot']} ({res})", row, fld.name, str(task["robot"]))
+                  len(chains[0]) - 2, float(swing.hit_time), f"{shot.method} shot "
+                  f"{shot.index} ({outcome})", row, fld.name, str(scene.robot))
 
 
 def _field_grid(field, n: int = 36) -> dict:
@@ -155,8 +155,6 @@ def _r4(a) -> list:
 
 
 def _page_data(replays: list[Replay], field, title: str) -> dict:
-    from ..minigolf.ball import BALL_RADIUS
-
     g = _field_grid(field)
     shots = [{"label": r.label, "t": _r4(r.t), "frame_dt": r.frame_dt, "chain": _r4(r.chain),
               "head_ends": _r4(r.head_ends), "ball": _r4(r.ball), "flange_index": r.flange_index,
@@ -256,13 +254,15 @@ def write_replay_gif(replay: Replay, field, path: str | os.PathLike, max_frames:
     return os.fspath(path)
 
 
-def write_replay(tasks: list[dict], out: str | os.PathLike, gif: bool = True,
+def write_replay(scene: Scene, shots: list[Shot], out: str | os.PathLike, gif: bool = True,
                  fps: float = 25.0, max_time: float = 8.0, progress=None) -> dict:
-    """Replay ``tasks`` (shots of :func:`seds_casadi.app.play.play_shot`, on one field) into
-    ``out``: ``replay.html`` with all of them and, with ``gif``, one GIF per shot.
+    """Replay ``shots`` of one scene into ``out``: ``replay.html`` with all of them and, with
+    ``gif``, one GIF per shot.
 
     Parameters
     ----------
+    scene : Scene
+    shots : list of Shot
     progress : callable, optional
         Called with a message before each shot (e.g. a logger's ``info``).
 
@@ -271,22 +271,18 @@ def write_replay(tasks: list[dict], out: str | os.PathLike, gif: bool = True,
     dict
         ``html`` (the page's path), ``gifs`` (paths), ``replays`` (the :class:`Replay` objects).
     """
-    from ..minigolf.fields import Field
-
-    if not tasks:
-        raise ValueError("no shots to replay: give at least one task")
-    if len({t["field"] for t in tasks}) > 1:
-        raise ValueError("the shots of one replay page are on one field")
+    if not shots:
+        raise ValueError("no shots to replay: give at least one shot")
     os.makedirs(out, exist_ok=True)
-    fld = Field.from_dict(tasks[0]["field_spec"], source=tasks[0]["field"])
+    fld = scene.field
     replays, gifs = [], []
-    for i, task in enumerate(tasks):
+    for i, shot in enumerate(shots):
         if progress:
-            progress(f"replay {i + 1}/{len(tasks)}: simulating {task['method']} shot "
-                     f"{task['shot']} again")
-        replays.append(replay_shot(task, fps, max_time))
+            progress(f"replay {i + 1}/{len(shots)}: simulating {shot.method} shot "
+                     f"{shot.index} again")
+        replays.append(replay_shot(scene, shot, fps, max_time))
         if gif:
             gifs.append(write_replay_gif(replays[-1], fld, os.path.join(
-                out, f"replay_{task['method']}_{task['shot']}.gif")))
+                out, f"replay_{shot.method}_{shot.index}.gif")))
     html = write_replay_html(replays, fld, os.path.join(out, "replay.html"))
     return {"html": html, "gifs": gifs, "replays": replays}

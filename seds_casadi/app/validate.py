@@ -13,11 +13,21 @@ import time
 from dataclasses import dataclass, replace
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
+from ..core._io import atomic_csv, atomic_text
+from ..game.launch import calibrate_launch
+from ..game.scene import Scene, SceneSpec
+from ..game.shot import Shot, play_shot
 from ..minigolf._progress import progress_bar
-from ..minigolf.ball import BALL_RADIUS
-from ..sim.shot import simulate_shot_exudyn
+from ..minigolf.fields import load_field
+from ..minigolf.parameters import make_model
+from ..minigolf.teacher import DEFAULTS, collect_dataset
+from ..motion.hitting import HittingMotion
+from ..motion.putting_demos import load_hitting_demos
 from ._config import whole_number, with_overrides
+from .executors import open_executor
+from .plotting import plot_field, pyplot, save_figure
 from .reach import check_reach
 
 __all__ = ["validate", "ValidateConfig", "VALIDATION_COLUMNS"]
@@ -72,50 +82,45 @@ class ValidateConfig:
 
 
 def _learn(fld, robot: str, progress: bool, quick: bool = False):
-    """The hitting motion, the teacher's data set for the field (checked against the robot's
-    reach) and GPR fitted on it."""
-    from ..minigolf.parameters import make_model
-    from ..minigolf.teacher import Stroke, collect_dataset
-    from ..motion.hitting import HittingMotion
-    from ..motion.putting_demos import load_hitting_demos
-
+    """The scene (the hitting motion and the robot's measured launch), the teacher's data set
+    for the field on that launch (checked against the robot's reach) and GPR fitted on it."""
     t0 = time.perf_counter()
     motion = HittingMotion.fit(load_hitting_demos(), n_components=3)
-    data = collect_dataset(fld, Stroke.from_motion(motion),
-                           resolution=(81, 26) if quick else (121, 41), progress=progress)
+    scene = Scene(robot, fld, motion)
+    arange = fld.teacher.get("alpha_range", DEFAULTS["alpha_range"])
+    krange = fld.teacher.get("kappa_range", DEFAULTS["kappa_range"])
+    scene = scene.with_launch(calibrate_launch(scene, arange, krange))
+    data = collect_dataset(fld, scene.stroke, resolution=(81, 26) if quick else (121, 41),
+                           progress=progress)
     check_reach(robot, fld, data.ball, data.alpha, motion.hitting_direction,
                 "situations the teacher taught")
-    from threadpoolctl import threadpool_limits
-
     with threadpool_limits(1):   # see play: BLAS threads slow small GPR fits down
         model = make_model("gpr").fit(data.situations, data.outputs)
-    _LOG.info("hitting motion, teacher (%d good shots) and GPR: %.1f s", len(data),
-              time.perf_counter() - t0)
-    return motion, data, model
+    _LOG.info("hitting motion, the robot's launch, teacher (%d good shots) and GPR: %.1f s",
+              len(data), time.perf_counter() - t0)
+    return scene, data, model
 
 
-def _play_shots(cfg: ValidateConfig, fld, motion, model, data, rng):
-    """Every shot's task (situations drawn in order, the model's prediction), played here or
-    on ``cfg.workers`` processes; rows and figure data in the shots' order."""
-    from .executors import open_executor
-
-    tasks = []
+def _play_shots(cfg: ValidateConfig, scene: Scene, model, data, rng):
+    """Every shot (situations drawn in order, the model's prediction), played here or on
+    ``cfg.workers`` processes (each loads the scene once); rows and figure data in the shots'
+    order."""
+    shots = []
     for i in range(cfg.shots):
-        ball, hole = _situation(fld, rng)
+        ball, hole = _situation(scene.field, rng)
         pred = model.predict((hole - ball)[None])[0]
-        tasks.append({"cfg": cfg, "i": i, "field": fld.name, "field_spec": fld.spec,
-                      "motion": motion, "ball": ball.tolist(), "hole": hole.tolist(),
-                      "alpha": float(np.deg2rad(pred[0])),
-                      "kappa": float(pred[1]) if len(pred) > 1 else float(data.kappa[0])})
+        shots.append(Shot(ball, hole, float(np.deg2rad(pred[0])),
+                          float(pred[1]) if len(pred) > 1 else float(data.kappa[0]), index=i))
     if cfg.workers > 1:   # processes load the motion from its folder
         folder = os.path.join(cfg.out, "models", "motion")
-        motion.save(folder)
-        for t in tasks:
-            t["motion"] = os.path.abspath(folder)
+        scene.motion.save(folder)
+        scene = Scene(scene.robot, scene.field, scene.motion, scene.launch_table, folder)
+    where = scene.spec() if cfg.workers > 1 else scene
     with open_executor(cfg.workers) as ex:
-        futures = [ex.submit(_shot, t) for t in tasks]
+        futures = [ex.submit(_shot, where, s, cfg.robot) for s in shots]
         done = [f.result() for f in progress_bar(
-            futures, cfg.progress, desc=f"validate {cfg.robot} on {fld.name}", unit="shot")]
+            futures, cfg.progress, desc=f"validate {cfg.robot} on {scene.field.name}",
+            unit="shot")]
     return [r for r, _ in done], [s for _, s in done]
 
 
@@ -125,50 +130,32 @@ def _situation(fld, rng):
     return balls[0], holes[0]
 
 
-def _shot(task: dict):
-    """One shot on both models (a picklable task: ``cfg, field_spec, motion`` (a motion or
-    its folder), ``ball, hole, alpha [rad], kappa, i``): its row of ``validation.csv``, and
-    what the figure needs (the paths, the swing and the exudyn shot; None without a hit in
+def _shot(scene: Scene | SceneSpec, shot: Shot, robot: str):
+    """One shot on both engines (a picklable task): its row of ``validation.csv``, and what
+    the figure needs (the paths, the swing and the exudyn shot; None without a hit in
     exudyn)."""
-    from ..minigolf.ball import impact, simulate_shots
-    from ..minigolf.fields import Field
-    from ..robots.control import place_robot, simulate_swing
-    from .play import _motion
-
-    cfg, i = task["cfg"], task["i"]
-    fld = Field.from_dict(task["field_spec"], source=task["field"])
-    motion = _motion(task["motion"])
-    ball, hole = np.asarray(task["ball"], float), np.asarray(task["hole"], float)
-    alpha, kappa = task["alpha"], task["kappa"]
-    z = float(fld.surface.height(ball[None])[0]) + BALL_RADIUS
-    # the robot stands at its default place beside each ball, on the surface
-    swing = simulate_swing(place_robot(cfg.robot, ball, fld), motion,
-                           np.array([ball[0], ball[1], z]), alpha, kappa)
-    row = {"field": fld.name, "robot": cfg.robot, "shot": i}
-    if not swing.hit:
+    if isinstance(scene, SceneSpec):
+        scene = scene.load()
+    row = {"field": scene.field.name, "robot": robot, "shot": shot.index}
+    # the robot stands at its default place beside each ball; the face as the robot holds it
+    # and the arm's effective mass at the face launch the ball (game.shot.swing_launch)
+    fast = play_shot(scene, shot, "ball", keep_swing=True)
+    if not fast.hit:
         row.update(sunk_fast=False, sunk_exudyn=False, **_NOT_COMPARED)
         return row, None
-    # the face as the robot holds it (five joints cannot keep it square) and the arm's
-    # effective mass at the face
-    launch = impact(swing.hit_velocity[None], face_normal=swing.face_normal[None],
-                    club_mass=swing.effective_mass)
-    fast = simulate_shots(fld, ball[None], launch, hole=hole, engine="numpy", record_paths=True)
     # the same swing in exudyn: the arm as a kinematic tree under the same controller, the
     # ball struck by the club face's contact triangles
-    ex = simulate_shot_exudyn(fld, ball, hole=hole, arm={
-        "robot": place_robot(cfg.robot, ball, fld), "motion": motion, "alpha": alpha,
-        "kappa": kappa})
+    ex = play_shot(scene, shot, "exudyn")
     if not ex.hit:
-        row.update(sunk_fast=bool(fast.sunk[0]), sunk_exudyn=False, **_NOT_COMPARED)
+        row.update(sunk_fast=fast.sunk, sunk_exudyn=False, **_NOT_COMPARED)
         return row, None
-    a, b2 = ex.launch_velocity, launch[0]
+    a, b2 = ex.launch_velocity, fast.launch_velocity
     cosang = a @ b2 / max(np.linalg.norm(a) * np.linalg.norm(b2), 1e-12)
-    row.update(sunk_fast=bool(fast.sunk[0]), sunk_exudyn=bool(ex.sunk),
+    row.update(sunk_fast=fast.sunk, sunk_exudyn=ex.sunk,
                impact_direction_error_deg=float(np.degrees(np.arccos(np.clip(cosang, -1, 1)))),
                impact_speed_error=float(abs(np.linalg.norm(a) / np.linalg.norm(b2) - 1)),
-               final_distance_m=float(np.linalg.norm(ex.final_position
-                                                     - fast.final_position[0])))
-    return row, (fast.paths[0], ex.path[:, 1:], hole, ball, swing, ex)
+               final_distance_m=float(np.linalg.norm(ex.final_position - fast.final_position)))
+    return row, (fast.path, ex.path, shot.hole, shot.ball, fast.swing, ex.exudyn)
 
 
 def _report(cfg: ValidateConfig, fld, rows: list[dict], shots: list) -> str:
@@ -210,17 +197,14 @@ def validate(config: ValidateConfig | None = None, **overrides) -> list[dict]:
     list of dict
         The rows of ``validation.csv`` (:data:`VALIDATION_COLUMNS`).
     """
-    from ..core._io import atomic_csv, atomic_text
-    from ..minigolf.fields import load_field
-
     cfg = with_overrides(ValidateConfig, config, overrides)
     if cfg.quick:
         cfg = replace(cfg, shots=min(cfg.shots, 3))
     fld = load_field(cfg.field)
     os.makedirs(cfg.out, exist_ok=True)
     rng = np.random.default_rng(cfg.seed)
-    motion, data, model = _learn(fld, cfg.robot, cfg.progress, cfg.quick)
-    rows, shots = _play_shots(cfg, fld, motion, model, data, rng)
+    scene, data, model = _learn(fld, cfg.robot, cfg.progress, cfg.quick)
+    rows, shots = _play_shots(cfg, scene, model, data, rng)
     atomic_csv(os.path.join(cfg.out, "validation.csv"), VALIDATION_COLUMNS,
                ([r[c] for c in VALIDATION_COLUMNS] for r in rows))
     text = _report(cfg, fld, rows, shots)
@@ -231,9 +215,7 @@ def validate(config: ValidateConfig | None = None, **overrides) -> list[dict]:
 
 
 def _report_figure(fld, paths, path, robot: str = ""):
-    from .plotting import _plt, plot_field, save_figure
-
-    plt = _plt()
+    plt = pyplot()
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(14, 3.8), gridspec_kw={"width_ratios": [2.2, 1]})
     plot_field(fld, ax=a1, legend=False)
     for k, p in enumerate(paths):

@@ -141,10 +141,7 @@ def _validated(path: str, a: dict, meta: dict) -> HittingDataset:
         raise ModelFileError(f"{path}: entry 'labels' holds negative strategy labels")
     try:
         st = meta["stroke"]
-        stroke = Stroke(np.array(st["direction"], float), float(st["speed"]),
-                        float(st["club_mass"]), float(st["restitution"]))
-        if not (stroke.club_mass > 0 and 0 <= stroke.restitution <= 1):
-            raise ValueError("club_mass must be positive and restitution in [0, 1]")
+        stroke = Stroke.from_dict(st)
         strategy, field_name = meta["strategy"], meta["field"]
         if strategy not in TEACHER_STRATEGIES or not isinstance(field_name, str):
             raise ValueError(f"unknown strategy {strategy!r} or field {field_name!r}")
