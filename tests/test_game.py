@@ -15,10 +15,11 @@ pytest.importorskip("pinocchio")
 from seds_casadi.game.launch import calibrate_launch  # noqa: E402
 from seds_casadi.game.scene import Scene  # noqa: E402
 from seds_casadi.game.shot import Shot, play_round, play_shot, swing_launch  # noqa: E402
-from seds_casadi.minigolf.ball import BALL_MASS, RESTITUTION, impact  # noqa: E402
+from seds_casadi.minigolf.ball import RESTITUTION, impact  # noqa: E402
 from seds_casadi.minigolf.fields import load_field  # noqa: E402
 from seds_casadi.minigolf.stroke import LaunchTable, Stroke  # noqa: E402
 from seds_casadi.minigolf.teacher import Teacher  # noqa: E402
+from seds_casadi.motion.golf import BALL_MASS  # noqa: E402
 from seds_casadi.motion.hitting import HittingMotion  # noqa: E402
 from seds_casadi.motion.putting_demos import load_hitting_demos  # noqa: E402
 from seds_casadi.robots.dynamics import effective_mass  # noqa: E402

@@ -3,7 +3,7 @@
 1. **Hitting motion**: SEDS + strength factor from the demonstrations (shipped putts by default).
 2. **Teacher**: good shots on the field's ball model (:mod:`seds_casadi.minigolf.teacher`),
    over the situations the field declares (:mod:`seds_casadi.minigolf.situations`); first the
-   robot is checked to reach the declared ball positions (:mod:`seds_casadi.app.reach`).
+   robot is checked to reach the declared ball positions (:mod:`seds_casadi.game.reach`).
 3. **Hitting parameters**: each learner (GPR, GMR) fitted on the teacher's data set (all of it,
    or ``train_size`` equally spaced situations, as one of Table 1's training sets).
 4. **A round**: random situations drawn from the field's declaration (the draw of Table 1's
@@ -40,6 +40,7 @@ from threadpoolctl import threadpool_limits
 from ..core._io import atomic_csv, atomic_text
 from ..core.demonstrations import load_demonstrations
 from ..game.launch import calibrate_launch
+from ..game.reach import check_reach, fastest_gain
 from ..game.scene import Scene
 from ..game.shot import Shot, play_round, play_shot
 from ..minigolf._progress import progress_bar
@@ -57,7 +58,6 @@ from ..robots.models import load_robot, robot_names
 from ._config import names_tuple, whole_number, with_overrides
 from .executors import open_executor
 from .play_figures import play_figures, strategy_figure
-from .reach import check_reach, fastest_gain
 from .replay import write_replay
 from .shot_table import SHOT_COLUMNS, shot_row
 from .teacher_cache import cached_dataset

@@ -23,8 +23,8 @@ __all__ = ["cached_dataset", "dataset_key"]
 _LOG = logging.getLogger(__name__)
 
 #: the modules whose code decides the teacher's data set
-_SOURCES = ("teacher", "hitting_data", "ball", "ball_kernel", "stroke", "surface", "fields",
-            "situations")
+_SOURCES = ("teacher", "hitting_data", "ball", "ball_kernel", "ball_physics", "stroke", "surface",
+            "fields", "field_schema", "situations")
 
 
 def dataset_key(field, stroke, settings: dict) -> str:
@@ -53,7 +53,8 @@ def cached_dataset(field, stroke, use_cache: bool = True, progress: bool = False
     (HittingDataset, bool)
         The data set and whether it came from the cache.
     """
-    from ..minigolf.teacher import HittingDataset, collect_dataset
+    from ..minigolf.hitting_data import HittingDataset
+    from ..minigolf.teacher import collect_dataset
 
     path = os.path.join(cache_folder(), "teacher", dataset_key(field, stroke, settings) + ".npz")
     if use_cache and os.path.exists(path):

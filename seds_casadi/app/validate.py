@@ -17,6 +17,7 @@ from threadpoolctl import threadpool_limits
 
 from ..core._io import atomic_csv, atomic_text
 from ..game.launch import calibrate_launch
+from ..game.reach import check_reach
 from ..game.scene import Scene, SceneSpec
 from ..game.shot import Shot, play_shot
 from ..minigolf._progress import progress_bar
@@ -28,7 +29,6 @@ from ..motion.putting_demos import load_hitting_demos
 from ._config import whole_number, with_overrides
 from .executors import open_executor
 from .plotting import plot_field, pyplot, save_figure
-from .reach import check_reach
 
 __all__ = ["validate", "ValidateConfig", "VALIDATION_COLUMNS"]
 

@@ -16,9 +16,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..minigolf.ball import BALL_RADIUS
 from ..minigolf.fields import Field
 from ..minigolf.stroke import LaunchTable, Stroke
+from ..motion.golf import BALL_RADIUS
 from ..motion.hitting import HittingMotion
 from ..robots.models import Robot, robot_names
 from ..robots.placement import place_robot

@@ -1,9 +1,9 @@
 """Can the robot play the situations a field declares? A check before any swing is simulated.
 
 The robot stands at its default place beside each ball
-(:func:`~seds_casadi.robots.control.place_robot`); a ball it cannot reach, or a start of the
+(:func:`~seds_casadi.robots.placement.place_robot`); a ball it cannot reach, or a start of the
 swing (0.3 m behind the ball, 5 cm up, turned by alpha: the default of
-:func:`~seds_casadi.robots.control.simulate_swing`) where the club head cannot be placed, makes
+:func:`~seds_casadi.robots.swing.simulate_swing`) where the club head cannot be placed, makes
 those situations unplayable. :func:`check_reach` names them and says what to change.
 :func:`fastest_gain` measures how fast the robot can swing: the largest speed gain kappa it
 executes within 2 % of the commanded club speed (its joint velocity and torque limits cap the
@@ -13,6 +13,11 @@ rest).
 from __future__ import annotations
 
 import numpy as np
+
+from ..motion.golf import BALL_RADIUS
+from ..motion.rotation import rotation_z
+from ..robots.placement import place_head, place_robot
+from ..robots.swing import simulate_swing
 
 __all__ = ["unreachable", "check_reach", "fastest_gain"]
 
@@ -37,10 +42,6 @@ def unreachable(robot: str, field, balls, alphas, direction) -> list[tuple[np.nd
     -------
     list of (ball (2,), reason)
     """
-    from ..minigolf.ball import BALL_RADIUS
-    from ..motion.hitting import rotation_z
-    from ..robots.control import place_head, place_robot
-
     bad = []
     d = np.asarray(direction, float)
     for b, a in zip(np.atleast_2d(balls), np.atleast_1d(alphas)):
@@ -74,12 +75,9 @@ def fastest_gain(robot: str, field, motion, ball=None, tolerance: float = 0.02,
                  kappa_range=(0.2, 2.4), iterations: int = 7) -> float:
     """The largest speed gain the robot swings within ``tolerance`` of the commanded club
     speed (Eq. 14's kappa v*), found by bisection over ``kappa_range`` with swings on the
-    robot's dynamics (:func:`~seds_casadi.robots.control.simulate_swing`; a straight swing at
+    robot's dynamics (:func:`~seds_casadi.robots.swing.simulate_swing`; a straight swing at
     ``ball``, default the middle of the declared ball positions). Returns the range's low end
     when even that is too fast, its high end when nothing in it is."""
-    from ..minigolf.ball import BALL_RADIUS
-    from ..robots.control import place_robot, simulate_swing
-
     if ball is None:
         ball = field.situations.ball.design(9)[4 if field.situations.ball.kind != "fixed"
                                                else 0]
