@@ -3,7 +3,7 @@ arm's limits on the simulated motion (not only the reference).
 
 Each swing: a ball position uniform in the field's ball region, alpha uniform in +-30 deg and
 kappa uniform over the robot's played range (WAM 0.5-1.5, Katana 0.2-0.45 by default), on the
-robot placed beside the ball (:func:`~seds_casadi.robots.control.place_robot`). Printed per
+robot placed beside the ball (:func:`~seds_casadi.robots.placement.place_robot`). Printed per
 robot: hits; the peak joint speed and torque against each joint's limit (largest over the
 swings, and how many swings broke one); the largest joint speed change in the first 20 ms
 (the start step); the direction error of the club velocity at the hit; the launch direction

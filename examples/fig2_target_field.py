@@ -16,7 +16,7 @@ import numpy as np  # noqa: E402
 
 from seds_casadi import SEDS  # noqa: E402
 from seds_casadi.core.datasets import load_lasa
-from seds_casadi.motion.hitting import TargetField
+from seds_casadi.motion import TargetField
 
 ap = argparse.ArgumentParser()
 ap.add_argument("--out", default="examples_out/fig2.png",

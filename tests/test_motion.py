@@ -10,12 +10,11 @@ from hypothesis import strategies as st
 from sklearn.base import clone
 
 from seds_casadi import SEDS, Demonstrations
+from seds_casadi.core import StrengthFactor, StrengthFactorLearner
 from seds_casadi.motion import (
     HittingMotion,
     HittingMotionLearner,
     Perturbations,
-    StrengthFactor,
-    StrengthFactorLearner,
     TargetField,
     approach_paths,
     plane_crossing,

@@ -525,7 +525,8 @@ def test_ctrl_c_on_a_command_with_workers_ends_cleanly(tmp_path):
 
 def test_a_urdf_without_a_flange_takes_its_chains_tip():
     pytest.importorskip("pinocchio")
-    from seds_casadi.robots.models import ROBOTS_FOLDER, load_robot
+    from seds_casadi.robots.models import load_robot
+    from seds_casadi.robots.urdf import ROBOTS_FOLDER
 
     path = os.path.join(ROBOTS_FOLDER, "wam7.urdf")
     known, own = load_robot("wam"), load_robot(path)

@@ -21,18 +21,17 @@ from seds_casadi.robots import (
     place_head,
     simulate_swing,
 )
-from seds_casadi.robots.models import (
+from seds_casadi.robots.club import Club
+from seds_casadi.robots.models import load_robot, robot_names
+from seds_casadi.robots.orientation import log3_sx, orientation_error_sx
+from seds_casadi.robots.urdf import (
     KATANA_ORIGINS,
     KATANA_TOOL,
     ROBOTS_FOLDER,
     WAM_DH,
-    Club,
     katana_urdf,
-    load_robot,
-    robot_names,
     wam_urdf,
 )
-from seds_casadi.robots.orientation import log3_sx, orientation_error_sx
 
 pytestmark = pytest.mark.slow
 
@@ -285,7 +284,7 @@ def test_start_is_placed_behind_the_ball_facing_the_hit(motion):
 
 
 def test_effective_mass_at_the_face_matches_the_inverse_inertia():
-    from seds_casadi.robots.control import effective_mass
+    from seds_casadi.robots.dynamics import effective_mass
 
     r = load_robot("wam")
     for _ in range(3):

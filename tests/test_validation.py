@@ -13,7 +13,7 @@ from seds_casadi.minigolf import Stroke
 from seds_casadi.minigolf.ball import impact, simulate_shots
 from seds_casadi.minigolf.fields import Field, load_field
 from seds_casadi.minigolf.teacher import Teacher
-from seds_casadi.sim.exudyn_shot import field_mesh, free_fall, simulate_shot_exudyn
+from seds_casadi.sim import field_mesh, free_fall, simulate_shot_exudyn
 
 pytestmark = [pytest.mark.slow,
               pytest.mark.filterwarnings("ignore::DeprecationWarning")]
@@ -82,7 +82,7 @@ def test_kinematic_tree_falls_like_pinocchio(name):
 def test_the_arm_in_exudyn_hits_like_the_pinocchio_swing():
     from seds_casadi.motion.hitting import HittingMotion
     from seds_casadi.motion.putting_demos import load_hitting_demos
-    from seds_casadi.robots.control import default_base, simulate_swing
+    from seds_casadi.robots import default_base, simulate_swing
     from seds_casadi.robots.models import load_robot
 
     motion = HittingMotion.fit(load_hitting_demos(), n_components=3)

@@ -53,7 +53,7 @@ def _shots_figure(fld, rows, learners, out, robot) -> None:
 def _motion_figure(motion, out) -> None:
     """The learned motion (Eq. 14): swings from a few starts turned by three angles, from above
     (x-y) and from the side (x-z), positions relative to the ball."""
-    from ..motion.hitting import rotation_z
+    from ..motion.rotation import rotation_z
 
     plt = pyplot()
     fig, (top, side) = plt.subplots(2, 1, figsize=(8, 7.6), sharex=True,

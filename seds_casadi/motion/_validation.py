@@ -4,10 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.strength import as_points
-
-__all__ = ["as_points", "check_alpha_kappa"]
-
 
 def check_alpha_kappa(alpha, kappa) -> tuple[float, float]:
     """The hitting angle alpha [rad] (finite) and speed gain kappa (> 0) as floats."""

@@ -1,6 +1,6 @@
 """Approach paths: short virtual paths into the ball added to the SEDS data of a hitting motion
 so that swings line up with psi* before they reach the ball (an extension of the paper, on by
-default in :class:`~seds_casadi.motion.learner.HittingMotionLearner`).
+default in :class:`~seds_casadi.motion.hitting.HittingMotionLearner`).
 
 Why: plain SEDS fixes the limit direction psi* but not how fast swings line up with it. With the
 slowest and next eigenvalues of J = df/dx at the ball close (ratio ~1.6 on the shipped

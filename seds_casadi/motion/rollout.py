@@ -23,7 +23,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..codegen import FastEvaluator, batch_evaluate
-from ._validation import as_points, check_alpha_kappa
+from ..core.strength import as_points
+from ._validation import check_alpha_kappa
 from .resting import check_rest_mode, resting_system
 
 if TYPE_CHECKING:  # pragma: no cover

@@ -21,7 +21,7 @@ import numpy as np
 from ..codegen import batch_evaluate
 from ..core.gmm import responsibilities
 from ..core.stable_ds import StableDS
-from ._validation import as_points
+from ..core.strength import as_points
 
 __all__ = ["TargetField", "target_field_sx", "certified_velocity_sx", "limit_direction"]
 

@@ -20,12 +20,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .club import DEFAULT_CLUBS, Club
-from .urdf import KATANA_ORIGINS, KATANA_TOOL, ROBOTS_FOLDER, WAM_DH, katana_urdf, wam_urdf
+from .urdf import ROBOTS_FOLDER
 
-# Club, DEFAULT_CLUBS and the URDF names are re-exported: they were defined here before the
-# module was split
-__all__ = ["Robot", "load_robot", "robot_names", "Club", "DEFAULT_CLUBS", "wam_urdf",
-           "katana_urdf", "ROBOTS_FOLDER", "WAM_DH", "KATANA_ORIGINS", "KATANA_TOOL"]
+__all__ = ["Robot", "load_robot", "robot_names"]
 
 
 # ----------------------------------------------------------------------------- registry
@@ -175,7 +172,8 @@ def load_robot(name_or_path: str, club: Club | None = None, base=(0.0, 0.0, 0.0,
     ----------
     name_or_path : str
     club : Club, optional
-        Default: :data:`DEFAULT_CLUBS` for the robot (a 0.5 m, 0.4 kg putter otherwise).
+        Default: :data:`~seds_casadi.robots.club.DEFAULT_CLUBS` for the robot (a 0.5 m, 0.4 kg
+        putter otherwise).
     base : (x, y, z, yaw)
         The base's placement on the field [m, rad].
     flange, q_home : optional

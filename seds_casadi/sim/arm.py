@@ -5,7 +5,7 @@ The arm is an exudyn ``ObjectKinematicTree`` with the same joint placements, mas
 mass and inertias as the robot's Pinocchio model, club included (:func:`add_kinematic_tree`;
 free fall matches Pinocchio's ABA to 1e-13 rad, :func:`free_fall`). :class:`ExudynArm` holds the
 arm of one shot: the club face's contact marker and corners, and the
-:class:`~seds_casadi.robots.control.SwingController` that sets its joint torques every 2 ms from
+:class:`~seds_casadi.robots.controller.SwingController` that sets its joint torques every 2 ms from
 exudyn's joint state (not prescribed motion). Pinocchio and the robot layer are imported only
 when an arm is used, so a shot with a free club head needs exudyn alone.
 """
@@ -175,8 +175,9 @@ def add_arm(mbs, arm: dict, p_ball: np.ndarray) -> ExudynArm:
     """Add the robot of ``arm`` (a dict with ``robot``, ``motion``, ``alpha``, ``kappa`` and
     optionally ``gains``) as a kinematic tree whose club starts behind the ball at ``p_ball``
     (3,), with its controller reset there."""
-    from ..motion.hitting import rotation_z
-    from ..robots.control import SwingController, place_head
+    from ..motion.rotation import rotation_z
+    from ..robots.controller import SwingController
+    from ..robots.placement import place_head
 
     robot, motion = arm["robot"], arm["motion"]
     alpha, kappa = float(arm["alpha"]), float(arm["kappa"])

@@ -223,7 +223,7 @@ def simulate_shot_exudyn(field: Field, ball_xy, club_velocity=None, hole=None,
                          mesh_spacing: float | None = None, gap: float = 0.01,
                          restitution: float = RESTITUTION, arm: dict | None = None,
                          max_wall_time: float = 600.0) -> ExudynShot:
-    """One shot in exudyn (:mod:`seds_casadi.sim.exudyn_shot`); the ball rolls until it drops,
+    """One shot in exudyn (the model: :mod:`seds_casadi.sim`); the ball rolls until it drops,
     stops or the time runs out.
 
     Without ``arm``: a free club head of the impact model's effective mass starts ``gap``
