@@ -26,7 +26,7 @@ import numpy as np
 from seds_casadi.app.lasa import dsopt_table, run_lasa
 from seds_casadi.core.datasets import LASA_SINGLE_SHAPES
 from seds_casadi.core.model_selection import BIC_RULES
-from seds_casadi.core.parametrization import OBJECTIVES
+from seds_casadi.core.settings import OBJECTIVES
 
 
 def _components(text: str) -> int | str:

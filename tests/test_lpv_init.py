@@ -70,5 +70,6 @@ def test_lpv_init_fits_a_certified_model(lyapunov):
 
 
 def test_unknown_init_is_refused():
-    with pytest.raises(ValueError, match="unknown init 'kmeans'.*joint-em, lpv"):
+    with pytest.raises(ValueError, match="'init' parameter of SEDS must be a str among "
+                                         "{'joint-em', 'lpv', 'pc'}. Got 'kmeans'"):
         SEDS(2, init="kmeans").fit(_spiral_demos())

@@ -11,7 +11,8 @@ from oracles import unpack as unpack_oracle
 from seds_casadi import SEDS
 from seds_casadi.codegen import compiler_available
 from seds_casadi.core.objectives import SumKernels
-from seds_casadi.core.parametrization import OBJECTIVES, Layout, unpack_casadi, unpack_numpy
+from seds_casadi.core.parametrization import Layout, unpack_casadi, unpack_numpy
+from seds_casadi.core.settings import OBJECTIVES
 
 MARGIN = 1e-3
 

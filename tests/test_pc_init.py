@@ -109,7 +109,8 @@ def test_joint_gmm_moves_the_gmm():
 
 
 def test_unknown_gmm_is_refused():
-    with pytest.raises(ValueError, match="unknown gmm 'frozen'.*joint, fixed"):
+    with pytest.raises(ValueError, match="'gmm' parameter of SEDS must be a str among "
+                                         "{'joint', 'fixed'}. Got 'frozen'"):
         SEDS(2, gmm="frozen").fit(_spiral_demos())
 
 

@@ -18,7 +18,7 @@ from seds_casadi import (
 )
 from seds_casadi.core.datasets import load_lasa
 from seds_casadi.core.metrics import direction_error
-from seds_casadi.core.parametrization import OBJECTIVES
+from seds_casadi.core.settings import OBJECTIVES
 
 
 def _assert_certified(model: StableDS):
@@ -217,11 +217,16 @@ def test_iteration_limit_warns_or_raises(spiral_demos):
 @pytest.mark.parametrize(
     "kwargs, exc, match",
     [
-        (dict(n_components=0), ValueError, "at least 1"),
-        (dict(n_components=2.5), TypeError, "integer"),
-        (dict(n_components=2, objective="speed"), ValueError, "unknown objective"),
-        (dict(n_components=2, hessian="bfgs"), ValueError, "unknown hessian"),
-        (dict(n_components=2, omega_lower=0.0), ValueError, "omega_lower"),
+        (dict(n_components=0), ValueError,
+         r"'n_components' parameter of SEDS must be an int in the range \[1, inf\) or a str "
+         r"among \{'bic'\}. Got 0"),
+        (dict(n_components=2.5), TypeError, "'n_components' parameter of SEDS must be an int"),
+        (dict(n_components=2, objective="speed"), ValueError,
+         "'objective' parameter of SEDS must be a str among {'direction', 'mse', 'likelihood'}"),
+        (dict(n_components=2, hessian="bfgs"), ValueError,
+         "'hessian' parameter of SEDS must be a str among {'auto', 'exact', 'limited-memory'}"),
+        (dict(n_components=2, omega_lower=0.0), ValueError,
+         r"'omega_lower' parameter of SEDS must be a float in the range \(0.0, inf\)"),
     ],
 )
 def test_bad_settings_are_refused_by_fit(kwargs, exc, match, spiral_demos):

@@ -73,7 +73,7 @@ def _components(text: str) -> int | str:
 
 
 def _add_fit(sub, quiet) -> None:
-    from ..core.parametrization import OBJECTIVES
+    from ..core.settings import OBJECTIVES, Formulation, GMMMode, Init, Lyapunov, SpeedCalibration
 
     f = sub.add_parser("fit", help="fit a stable DS to demonstrations from a .npz or .csv file",
                        parents=[quiet],
@@ -90,25 +90,23 @@ def _add_fit(sub, quiet) -> None:
                         "velocities nor time stamps [from the file]")
     f.add_argument("--seed", type=int, default=0, help="random seed of the initialisation [0]")
     f.add_argument("--max-iter", type=int, default=1000, help="IPOPT iteration limit [1000]")
-    f.add_argument("--lyapunov", choices=("identity", "learned"), default="identity",
+    f.add_argument("--lyapunov", choices=Lyapunov.values(), default="identity",
                    help="the certificate's V = (x - x*)^T P (x - x*): P = I (SEDS) or a "
                         "learned P [identity]")
-    f.add_argument("--formulation", choices=("by-construction", "constrained"),
-                   default="by-construction",
+    f.add_argument("--formulation", choices=Formulation.values(), default="by-construction",
                    help="Eq. 10 by the parametrization or as NLP constraints [by-construction]")
     f.add_argument("--gain-limit", type=float, default=None,
                    help="bound the stiffness of the components (units of the data's rate; "
                         "10 suited the LASA shapes, but it can also hold a fit back: "
                         "compare with and without) [none]")
-    f.add_argument("--init", choices=("joint-em", "lpv", "pc"), default="joint-em",
+    f.add_argument("--init", choices=Init.values(), default="joint-em",
                    help="IPOPT's start: EM on [x; xdot] (SEDS), LPV-DS's (EM on x, "
                         "least-squares stable gains) or the same from a physically-consistent "
                         "clustering (PC-GMM's similarity) [joint-em]")
-    f.add_argument("--gmm", choices=("joint", "fixed"), default="joint",
+    f.add_argument("--gmm", choices=GMMMode.values(), default="joint",
                    help="optimise the GMM with the dynamics (SEDS) or keep the start's GMM and "
                         "optimise the dynamics only (LPV-DS's split; with --init pc) [joint]")
-    f.add_argument("--speed", choices=("strength", "median", "least-squares"),
-                   default="strength",
+    f.add_argument("--speed", choices=SpeedCalibration.values(), default="strength",
                    help="how a direction-objective model gets the demonstrated speeds: a "
                         "strength factor v(x) by GMR along the certified streamlines (Eq. 12), "
                         "or one factor on every gain [strength]")
@@ -145,7 +143,7 @@ def _choice(text: str) -> tuple[str, list]:
 
 def _add_lasa(sub, quiet) -> None:
     from ..core.datasets import LASA_SHAPES
-    from ..core.parametrization import OBJECTIVES
+    from ..core.settings import OBJECTIVES
     from .lasa import DEFAULT_PROTOCOLS, PROTOCOLS
 
     def components(text: str) -> int | str:
@@ -327,7 +325,7 @@ def _cmd_fit(a) -> int:
 
 
 def _cmd_lasa(a) -> int:
-    from ..core.parametrization import OBJECTIVES
+    from ..core.settings import OBJECTIVES
     from .lasa import run_lasa, summary_table
 
     shapes, objectives, protocols = a.shapes, a.objectives, a.protocols

@@ -63,9 +63,9 @@ from ..core.metrics import (
     velocity_rmse,
 )
 from ..core.model_selection import BIC_RULES, choose_k_by_bic
-from ..core.parametrization import OBJECTIVES
 from ..core.search import DemoSearchCV, held_out_scores
 from ..core.seds import SEDS
+from ..core.settings import OBJECTIVES
 
 __all__ = ["LasaResult", "evaluate_shape", "run_lasa", "write_csv", "summary_table", "PROTOCOLS",
            "DEFAULT_PROTOCOLS", "DsOptResult", "DsOptSet", "dsopt_sets", "dsopt_scores",

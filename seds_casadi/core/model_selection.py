@@ -58,15 +58,13 @@ def bic_n_components(X: np.ndarray, Xdot: np.ndarray, max_components: int = MAX_
                          f"{Xdot.shape}")
     if int(max_components) < 1:
         raise ValueError(f"max_components must be at least 1, got {max_components}")
-    if rule not in BIC_RULES:
-        raise ValueError(f"unknown BIC rule {rule!r}; valid: {', '.join(BIC_RULES)}")
+    _check_rule(rule)
     d = X.shape[1]
     Xs = X / max(np.sqrt(np.mean(X**2)), 1e-300)
     Xds = Xdot / max(np.sqrt(np.mean(Xdot**2)), 1e-300)
     k_max = max(1, min(int(max_components), len(X) // (2 * (d + 1))))
     bic = bic_scores(Xs, Xds, k_max=k_max, random_state=random_state, n_init=n_init)
-    K = dsopt_elbow_k(bic) if rule == "ds-opt" else int(np.argmin(bic)) + 1
-    return K, bic
+    return _k_by_rule(bic, rule), bic
 
 
 def bic_scores(X: np.ndarray, Xdot: np.ndarray, k_max: int = 15, random_state=0,
@@ -187,9 +185,18 @@ def choose_k_by_bic(X: np.ndarray, Xdot: np.ndarray, k_max: int = 15, random_sta
     -------
     int
     """
+    _check_rule(rule)
+    return _k_by_rule(bic_scores(X, Xdot, k_max=k_max, random_state=random_state,
+                                 n_init=n_init), rule)
+
+
+def _check_rule(rule: str) -> None:
     if rule not in BIC_RULES:
         raise ValueError(f"unknown BIC rule {rule!r}; valid: {', '.join(BIC_RULES)}")
-    b = bic_scores(X, Xdot, k_max=k_max, random_state=random_state, n_init=n_init)
-    return dsopt_elbow_k(b) if rule == "ds-opt" else int(np.argmin(b)) + 1
+
+
+def _k_by_rule(bic: np.ndarray, rule: str) -> int:
+    """K (1-based) of a BIC curve by a rule of :data:`BIC_RULES`."""
+    return dsopt_elbow_k(bic) if rule == "ds-opt" else int(np.argmin(bic)) + 1
 
 

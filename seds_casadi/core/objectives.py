@@ -32,6 +32,7 @@ from ..codegen import UnsupportedOperation, compile_functions, compiler_availabl
 from ..codegen.column_sum import ColumnSum
 from .gmm import logsumexp_parts_sx
 from .parametrization import DIRECTION_EPS, Layout, unpack_casadi
+from .settings import Objective
 
 __all__ = ["sample_objective", "SumKernels", "approach_constraints"]
 
@@ -39,7 +40,7 @@ _LOG = logging.getLogger(__name__)
 _LOG_2PI = float(np.log(2.0 * np.pi))
 
 
-def sample_objective(layout: Layout, objective: str, margin: float) -> ca.Function:
+def sample_objective(layout: Layout, objective: Objective | str, margin: float) -> ca.Function:
     """The objective term of one sample, g(theta, x, xdot, c), as an SX Function.
 
     ``c`` is the sample's coefficient: w_i / ||xdot_i|| for ``"direction"`` (Eq. 9 and 11; 0 for a
@@ -52,6 +53,8 @@ def sample_objective(layout: Layout, objective: str, margin: float) -> ca.Functi
     with f(x) = sum_k h^k(x) A_k x (Eq. 5 in the attractor frame, where mu_xdot^k = A_k mu_x^k);
     in the constrained form f(x) = sum_k h^k(x) (mu_xdot^k + A_k (x - mu_x^k)), Eq. 5 as written.
     """
+    objective = Objective.parse(objective, "objective")
+    likelihood = objective is Objective.LIKELIHOOD
     K, d = layout.K, layout.d
     theta = ca.SX.sym("theta", layout.size)
     x = ca.SX.sym("x", d)
@@ -65,24 +68,22 @@ def sample_objective(layout: Layout, objective: str, margin: float) -> ca.Functi
         F = p["A"][k] @ x
         if p["b"]:  # constrained form: mu_xdot + A (x - mu), equal to A x once Eq. 10a holds
             F = F + p["b"][k]
-        if objective == "likelihood":
+        if likelihood:
             r = p["LQinv"][k] @ (xd - F)
             a = a - 0.5 * (ca.sumsqr(r) + p["logdetQ"][k] + d * _LOG_2PI)
         logp.append(a)
         fk.append(F)
     m, e, s = logsumexp_parts_sx(logp)
-    if objective == "likelihood":
+    if likelihood:
         g = -c * (m + ca.log(s))
     else:
         f = fk[0] * (e[0] / s)
         for k in range(1, K):
             f = f + fk[k] * (e[k] / s)
-        if objective == "mse":
+        if objective is Objective.MSE:
             g = c * ca.sumsqr(f - xd)
-        elif objective == "direction":
+        else:  # Objective.DIRECTION
             g = -c * ca.dot(f, xd) / ca.sqrt(ca.sumsqr(f) + DIRECTION_EPS)
-        else:
-            raise ValueError(f"unknown objective {objective!r}")
     return ca.Function("g", [theta, x, xd, c], [g], ["theta", "x", "xd", "c"], ["g"])
 
 
@@ -185,7 +186,7 @@ class SumKernels:
     Parameters
     ----------
     layout : Layout
-    objective : str
+    objective : Objective or str
     margin : float
     X, Xd : array, shape (n, d)
         Scaled data in the attractor frame.
@@ -210,10 +211,11 @@ class SumKernels:
         compiler and ``SEDS_CASADI_SIMD`` not ``0``) or CasADi's maps.
     """
 
-    def __init__(self, layout: Layout, objective: str, margin: float, X: np.ndarray,
+    def __init__(self, layout: Layout, objective: Objective | str, margin: float, X: np.ndarray,
                  Xd: np.ndarray, coef: np.ndarray, norm: float, compile: bool = True,
                  hessian: bool = True, threads: int | None = None,
                  blocked: bool = True) -> None:
+        objective = Objective.parse(objective, "objective")
         key = (layout.K, layout.d, layout.with_noise, layout.lyapunov, layout.formulation,
                objective, float(margin), bool(hessian))
         cached = _KERNELS.get(key)
@@ -346,7 +348,7 @@ class GramKernels:
 
     def __init__(self, layout: Layout, margin: float, gamma: np.ndarray, X: np.ndarray,
                  Xd: np.ndarray) -> None:
-        if layout.formulation != "by-construction":
+        if layout.constrained:  # ProblemSettings.gram_statistics decides when it is used
             raise ValueError("GramKernels needs the by-construction form")
         n, K = gamma.shape
         d = X.shape[1]

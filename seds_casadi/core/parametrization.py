@@ -45,12 +45,10 @@ import functools
 import casadi as ca
 import numpy as np
 
-__all__ = ["Layout", "unpack_casadi", "unpack_numpy", "stability_constraints", "OBJECTIVES",
-           "LYAPUNOV", "FORMULATIONS"]
+from .settings import Formulation, Lyapunov
 
-OBJECTIVES = ("direction", "mse", "likelihood")
-LYAPUNOV = ("identity", "learned")
-FORMULATIONS = ("by-construction", "constrained")
+__all__ = ["Layout", "unpack_casadi", "unpack_numpy", "stability_constraints"]
+
 #: the constrained form asks the leading minors of -(A^T P + P A) - 2 m I to be at least this
 #: (scaled units): strictly positive, so a solution within IPOPT's tolerance is still certified
 MINOR_FLOOR = 1e-6
@@ -67,30 +65,34 @@ class Layout:
     n_dims : int
     with_noise : bool
         Include the Cholesky factors of Q_k (the likelihood objective needs them).
-    lyapunov : {"identity", "learned"}
+    lyapunov : Lyapunov or {"identity", "learned"}
         V = |x - x*|^2 (SEDS), or a learned P shared by all components (module docstring).
-    formulation : {"by-construction", "constrained"}
+    formulation : Formulation or {"by-construction", "constrained"}
         Eq. 10 satisfied by the parametrization, or stated as NLP constraints.
+
+    Attributes
+    ----------
+    lyapunov : Lyapunov
+    formulation : Formulation
+    constrained : bool
+        The constrained form.
     """
 
     def __init__(self, n_components: int, n_dims: int, with_noise: bool,
-                 lyapunov: str = "identity", formulation: str = "by-construction") -> None:
-        if lyapunov not in LYAPUNOV:
-            raise ValueError(f"unknown lyapunov {lyapunov!r}; valid: {', '.join(LYAPUNOV)}")
-        if formulation not in FORMULATIONS:
-            raise ValueError(f"unknown formulation {formulation!r}; valid: "
-                             f"{', '.join(FORMULATIONS)}")
+                 lyapunov: Lyapunov | str = Lyapunov.IDENTITY,
+                 formulation: Formulation | str = Formulation.BY_CONSTRUCTION) -> None:
         self.K = int(n_components)
         self.d = int(n_dims)
         self.with_noise = bool(with_noise)
-        self.lyapunov = lyapunov
-        self.formulation = formulation
+        self.lyapunov = Lyapunov.parse(lyapunov, "lyapunov")
+        self.formulation = Formulation.parse(formulation, "formulation")
+        self.constrained = self.formulation is Formulation.CONSTRAINED
         d = self.d
         self.tril = np.array([(i, j) for i in range(d) for j in range(i + 1)], dtype=int)
         self.strict = np.array([(i, j) for i in range(d) for j in range(i)], dtype=int).reshape(-1, 2)
         self.n_tril = len(self.tril)
         self.n_strict = len(self.strict)
-        if formulation == "constrained":
+        if self.constrained:
             self._blocks = (("pi", 1), ("mu", d), ("mud", d), ("L", self.n_tril), ("A", d * d))
             self.n_logits = 0
         else:
@@ -100,7 +102,7 @@ class Layout:
         if with_noise:
             self._blocks += (("Q", self.n_tril),)
         self.per_component = sum(n for _, n in self._blocks)
-        self.n_lyapunov = self.n_tril if lyapunov == "learned" else 0
+        self.n_lyapunov = self.n_tril if self.lyapunov is Lyapunov.LEARNED else 0
         self.size = self.n_logits + self.K * self.per_component + self.n_lyapunov
 
     @property
@@ -163,11 +165,11 @@ def unpack_casadi(theta: ca.SX, layout: Layout, margin: float) -> dict:
     once Eq. 10a holds).
     """
     K, d = layout.K, layout.d
-    constrained = layout.formulation == "constrained"
+    constrained = layout.constrained
     keys = ("logpi", "mu", "L", "Linv", "logdet", "A", "LQ", "LQinv", "logdetQ", "pi", "mud", "b")
     out = {k: [] for k in keys}
     P = Pinv = None
-    if layout.lyapunov == "learned":
+    if layout.lyapunov is Lyapunov.LEARNED:
         P, Pinv = lyapunov_sx(theta, layout)
     out["P"] = P
     if not constrained:
@@ -244,12 +246,12 @@ def stability_constraints(layout: Layout, margin: float) -> tuple[ca.Function, n
 
 
 @functools.lru_cache(maxsize=64)
-def _unpack_function(K: int, d: int, with_noise: bool, margin: float, lyapunov: str,
-                     formulation: str) -> ca.Function:
+def _unpack_function(K: int, d: int, with_noise: bool, margin: float, lyapunov: Lyapunov,
+                     formulation: Formulation) -> ca.Function:
     layout = Layout(K, d, with_noise, lyapunov, formulation)
     theta = ca.SX.sym("theta", layout.size)
     p = unpack_casadi(theta, layout, margin)
-    if formulation == "constrained":
+    if layout.constrained:
         pri = ca.vertcat(*p["pi"])
         pri = ca.log(pri / ca.sum1(pri))  # (e) exactly: the projection of the raw priors
     else:

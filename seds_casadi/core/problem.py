@@ -20,8 +20,9 @@ from .gmm import responsibilities
 from .lyapunov import LYAPUNOV_DIAG_RANGE, estimate_lyapunov
 from .objectives import GramKernels, SumKernels
 from .parametrization import Layout, unpack_numpy
+from .settings import Hessian, Init, Lyapunov, Objective, ProblemSettings, SpeedCalibration
 
-__all__ = ["SEDSProblem", "build_problem", "direction_weights", "hessian_strategy", "HESSIANS"]
+__all__ = ["SEDSProblem", "build_problem", "direction_weights", "hessian_strategy"]
 
 
 def direction_weights(phase: np.ndarray, omega_lower: float, omega_upper: float) -> np.ndarray:
@@ -46,7 +47,8 @@ class SEDSProblem:
     ----------
     layout : Layout
         Index map of the optimisation vector.
-    objective : str
+    settings : ProblemSettings
+        What the problem was built from (``objective`` is ``settings.objective``).
     X, Xd : array, shape (n, d)
         Scaled data in the attractor frame (x* at the origin).
     weights : array, shape (n,)
@@ -63,12 +65,13 @@ class SEDSProblem:
         J, its exact gradient and Hessian (mapped per-sample CasADi kernels).
     objective_function : casadi.Function
         theta -> J(theta).
-    hessian : {"exact", "limited-memory"}
-        The second derivatives IPOPT uses (:func:`hessian_strategy`).
+    hessian : Hessian
+        The second derivatives IPOPT uses, ``EXACT`` or ``LIMITED_MEMORY``
+        (:func:`hessian_strategy`).
     """
 
     layout: Layout
-    objective: str
+    settings: ProblemSettings
     X: np.ndarray
     Xd: np.ndarray
     weights: np.ndarray
@@ -81,9 +84,15 @@ class SEDSProblem:
     margin: float
     kernels: SumKernels = field(repr=False)
     objective_function: ca.Function = field(repr=False)
-    hessian: str = "exact"
+    hessian: Hessian = Hessian.EXACT
 
-    def speed_factor(self, theta: np.ndarray, how: str = "median") -> float:
+    @property
+    def objective(self) -> Objective:
+        """The objective J (``settings.objective``)."""
+        return self.settings.objective
+
+    def speed_factor(self, theta: np.ndarray,
+                     how: SpeedCalibration | str = SpeedCalibration.MEDIAN) -> float:
         """The factor c > 0 that gives a direction-objective model the demonstrated speeds.
 
         The direction objective (Eq. 9) fixes f only up to a positive factor (scaling every A_k
@@ -98,8 +107,10 @@ class SEDSProblem:
           samples where ||f|| is largest (on LASA CShape it gave 0.018x the demonstrated speed
           at the median sample).
 
-        Returns 1 if no sample gives a positive factor.
+        Returns 1 if no sample gives a positive factor. ``"strength"`` (the gains under a
+        strength factor) is ``"median"``.
         """
+        how = SpeedCalibration.parse(how, "speed_calibration")
         p = self._model_params(theta)
         h = responsibilities(self.X, p["priors"], p["mu"], p["Sx"])
         return _speed_factor(p["A"], h, self.X, self.Xd, how)
@@ -141,7 +152,7 @@ class SEDSProblem:
             Q = p["Q"]
         else:
             h = responsibilities(self.X, p["priors"], p["mu"], p["Sx"])
-            if self.objective == "direction":
+            if self.objective is Objective.DIRECTION:
                 c = speed_factor if speed_factor is not None else _speed_factor(
                     p["A"], h, self.X, self.Xd)
                 p["A"] = p["A"] * c
@@ -175,7 +186,6 @@ class SEDSProblem:
         return p["priors"].copy(), means, covs
 
 
-SPEED_CALIBRATIONS = ("strength", "median", "least-squares")
 #: smallest eigenvalue ratio of a returned Sigma_x (see :meth:`SEDSProblem._model_params`)
 COVARIANCE_FLOOR = 1e-10
 #: variance added to the EM covariances of the initialisation (scaled units: positions and
@@ -188,14 +198,11 @@ INIT_REG_COVAR = 1e-6
 INIT_REG_COVAR_HIGH_D = 1e-2
 
 
-def _speed_factor(A, h, X, Xd, how: str = "median") -> float:
+def _speed_factor(A, h, X, Xd, how: SpeedCalibration = SpeedCalibration.MEDIAN) -> float:
     F = np.einsum("nk,kij,nj->ni", h, A, X)
-    if how == "least-squares":  # "strength" models keep the median-calibrated gains under v(x)
-        num, den = float(np.sum(F * Xd)), float(np.sum(F * F))
+    if how is SpeedCalibration.LEAST_SQUARES:  # "strength" models keep the median-calibrated
+        num, den = float(np.sum(F * Xd)), float(np.sum(F * F))  # gains under v(x)
         return num / den if (num > 0 and den > 0) else 1.0
-    if how not in ("median", "strength"):
-        raise ValueError(f"unknown speed calibration {how!r}; valid: "
-                         f"{', '.join(SPEED_CALIBRATIONS)}")
     nf, nv = np.linalg.norm(F, axis=1), np.linalg.norm(Xd, axis=1)
     ok = (nf > 1e-12 * max(nf.max(), 1e-300)) & (nv > 1e-12 * max(nv.max(), 1e-300))
     if not ok.any():
@@ -204,10 +211,6 @@ def _speed_factor(A, h, X, Xd, how: str = "median") -> float:
     return c if np.isfinite(c) and c > 0 else 1.0
 
 
-#: initialisations of the learner (see :func:`_initial_theta`)
-INITS = ("joint-em", "lpv", "pc")
-#: what IPOPT optimises: the GMM and the dynamics together (SEDS), or the dynamics only
-GMMS = ("joint", "fixed")
 #: the physically-consistent similarity is built on at most this many samples (evenly strided);
 #: the others take the resulting GMM's posterior
 PC_MAX_SAMPLES = 1000
@@ -343,11 +346,11 @@ def _pack_theta(layout: Layout, P0: np.ndarray, margin: float, weights: np.ndarr
     the layout's form (and the noise covariances of the residuals, weighted by ``resp``)."""
     d = layout.d
     theta = np.zeros(layout.size)
-    constrained = layout.formulation == "constrained"
+    constrained = layout.constrained
     if not constrained:
         logits = np.log(np.maximum(weights, 1e-12))
         theta[: layout.n_logits] = logits[:-1] - logits[-1]
-    if layout.lyapunov == "learned":
+    if layout.lyapunov is Lyapunov.LEARNED:
         theta[layout.lyapunov_slice] = layout.pack_tril(np.linalg.cholesky(P0))
     for k in range(layout.K):
         s, A, mu = layout.slices(k), gains[k], means[k]
@@ -371,23 +374,23 @@ def _pack_theta(layout: Layout, P0: np.ndarray, margin: float, weights: np.ndarr
 
 def _initial_theta(
     layout: Layout, X: np.ndarray, Xd: np.ndarray, margin: float, random_state,
-    P0: np.ndarray | None = None, init: str = "joint-em",
+    P0: np.ndarray | None = None, init: Init = Init.JOINT_EM,
 ) -> np.ndarray:
     """k-means + EM on the joint (x, xdot) data, then projected onto the stable set.
 
     The GMR gain A_k = Sigma_xdotx Sigma_x^-1 of each EM component is projected onto the gains
     stable for P0 (P0 = I unless a Lyapunov matrix is learned; :func:`_project_stable`).
 
-    With ``init="lpv"``, as LPV-DS: EM on the positions alone gives the priors, means and
+    With ``Init.LPV``, as LPV-DS: EM on the positions alone gives the priors, means and
     covariances (so the mixing is that GMM's posterior), and the A_k are those of least
     velocity error under that mixing, stable for P0 (:func:`_stable_gains_lpv`, started from the
-    projected GMR gains of the joint EM's nearest components). ``init="pc"``: the same with the
+    projected GMR gains of the joint EM's nearest components). ``Init.PC``: the same with the
     GMM of :func:`_pc_gmm`, started from each cluster's weighted least-squares gain, projected
     (no joint EM).
     """
     K, d = layout.K, layout.d
     P0 = np.eye(d) if P0 is None else np.asarray(P0, dtype=float)
-    if init == "pc":  # no joint EM: the start gains are each cluster's weighted regression
+    if init is Init.PC:  # no joint EM: the start gains are each cluster's weighted regression
         weights, means, covs = _pc_gmm(X, Xd, K, random_state,
                                        INIT_REG_COVAR if d <= 3 else INIT_REG_COVAR_HIGH_D)
         gamma = responsibilities(X, weights, means, covs)
@@ -404,7 +407,7 @@ def _initial_theta(
     gmr = [_project_stable(np.linalg.solve(Sx[k] + 1e-6 * np.eye(d),
                                            gm.covariances_[k, :d, d:]).T, P0, margin)
            for k in range(K)]  # Sigma_xdotx Sigma_x^-1, projected
-    if init != "lpv":
+    if init is Init.JOINT_EM:
         resp = gm.predict_proba(joint) if layout.with_noise else None
         return _pack_theta(layout, P0, margin, gm.weights_, gm.means_[:, :d], Sx, gmr, X, Xd,
                            resp)
@@ -416,32 +419,37 @@ def _initial_theta(
     return _pack_theta(layout, P0, margin, weights, means, covs, gains, X, Xd, gamma)
 
 
-def build_problem(demos: Demonstrations, n_components: int, objective: str,
-                  omega_lower: float = 1.0, omega_upper: float = 2.0,
-                  stability_margin: float = 1e-3, random_state=None,
-                  compile: bool = True, hessian: str = "auto", lyapunov: str = "identity",
-                  formulation: str = "by-construction",
-                  gain_limit: float | None = None, init: str = "joint-em",
-                  gmm: str = "joint") -> SEDSProblem:
+def build_problem(demos: Demonstrations, settings: ProblemSettings) -> SEDSProblem:
     """Scale the data, initialise by k-means + EM and build the CasADi problem.
 
-    Parameters are those of :class:`~seds_casadi.core.seds.SEDS` (already validated). With
-    ``lyapunov="learned"`` the initial P is :func:`~seds_casadi.core.lyapunov.estimate_lyapunov`
-    of the data.
+    Parameters
+    ----------
+    demos : Demonstrations
+    settings : ProblemSettings
+        K and the modes (:class:`~seds_casadi.core.seds.SEDS`'s parameters of the same names).
+        With ``lyapunov="learned"`` the initial P is
+        :func:`~seds_casadi.core.lyapunov.estimate_lyapunov` of the data.
     """
     if not isinstance(demos, Demonstrations):
         raise TypeError(
             f"fit expects a seds_casadi.Demonstrations, got {type(demos).__name__}; "
             "wrap your arrays with Demonstrations(positions, dt=...)"
         )
+    if not isinstance(settings, ProblemSettings):
+        raise TypeError(f"build_problem takes a ProblemSettings, got {type(settings).__name__}")
+    K = settings.n_components
+    if K is None:
+        raise ValueError("the settings have no n_components: choose K first (e.g. by "
+                         "bic_n_components, as SEDS(n_components='bic') does)")
+    margin = settings.stability_margin
     X, Xd, phase, _ = demos.stacked()
     d = X.shape[1]
-    layout = Layout(n_components, d, with_noise=objective == "likelihood", lyapunov=lyapunov,
-                    formulation=formulation)
+    layout = Layout(K, d, with_noise=settings.with_noise, lyapunov=settings.lyapunov,
+                    formulation=settings.formulation)
     # each sample gives d velocity equations; ask for at least one per parameter
-    if X.shape[0] * d < layout.size or X.shape[0] < 2 * n_components:
+    if X.shape[0] * d < layout.size or X.shape[0] < 2 * K:
         raise ValueError(
-            f"{X.shape[0]} samples are too few for n_components={n_components} in "
+            f"{X.shape[0]} samples are too few for n_components={K} in "
             f"{d}-D ({layout.size} parameters, {X.shape[0] * d} velocity values); use fewer "
             "components or more samples"
         )
@@ -451,18 +459,19 @@ def build_problem(demos: Demonstrations, n_components: int, objective: str,
         raise ValueError("the demonstrations do not move away from the target; nothing to learn")
     check_approach(demos, X, Xd)
     Xs, Xds = X / sx, Xd / sv
-    if objective == "direction":
-        w = direction_weights(phase, omega_lower, omega_upper)
+    direction = settings.objective is Objective.DIRECTION
+    if direction:
+        w = direction_weights(phase, settings.omega_lower, settings.omega_upper)
     else:
         w = np.ones(len(X))
-    P0 = estimate_lyapunov(Xs, Xds) if lyapunov == "learned" else None
-    theta0 = _initial_theta(layout, Xs, Xds, stability_margin, random_state, P0, init)
-    lbx, ubx = _bounds(layout, gain_limit)
+    P0 = estimate_lyapunov(Xs, Xds) if settings.learned_lyapunov else None
+    theta0 = _initial_theta(layout, Xs, Xds, margin, settings.random_state, P0, settings.init)
+    lbx, ubx = _bounds(layout, settings.gain_limit)
     theta0 = np.clip(theta0, lbx + 1e-9, ubx - 1e-9)
-    if gmm == "fixed":  # IPOPT takes x_i with lbx_i = ubx_i as a parameter of the problem
+    if settings.fixed_gmm:  # IPOPT takes x_i with lbx_i = ubx_i as a parameter of the problem
         idx = gmm_indices(layout)
         lbx[idx] = ubx[idx] = theta0[idx]
-    if objective == "direction":  # Eq. 9: w_i cos = (w_i / |xdot_i|) xdot_i . f / |f|
+    if direction:  # Eq. 9: w_i cos = (w_i / |xdot_i|) xdot_i . f / |f|
         speed = np.linalg.norm(Xds, axis=1)
         moving = speed > 0
         coef = np.where(moving, w / np.where(moving, speed, 1.0), 0.0)
@@ -470,34 +479,33 @@ def build_problem(demos: Demonstrations, n_components: int, objective: str,
     else:
         coef = np.ones(len(Xs))
         norm = float(len(Xs))
-    strategy = hessian_strategy(hessian, layout.size)
+    strategy = hessian_strategy(settings.hessian, layout.size)
     # the constrained form stays on one thread: its IPOPT path is sensitive to the order of
     # the sums (a 2-D test problem converged serially and ended 1.8e-6 infeasible at the
     # iteration limit with two threads), and to the blocked sums too (the test problems of
     # tests/test_lyapunov.py ended 0.33 and 2.4e-6 infeasible): it keeps one serial sum
-    constrained = formulation == "constrained"
-    if gmm == "fixed" and objective == "mse" and not constrained:
+    if settings.gram_statistics:
         # the mixing is fixed: the squared error is a quadratic form in the gains whose
         # (K d)-square statistics replace the sums over samples (exact, independent of n)
-        p0 = unpack_numpy(theta0, layout, stability_margin)
+        p0 = unpack_numpy(theta0, layout, margin)
         gamma = responsibilities(Xs, p0["priors"], p0["mu"], p0["Sx"])
-        kernels = GramKernels(layout, stability_margin, gamma, Xs, Xds)
-        strategy = "exact" if hessian == "auto" else strategy
+        kernels = GramKernels(layout, margin, gamma, Xs, Xds)
+        if settings.hessian is Hessian.AUTO:  # exact whatever the size: the kernels are small
+            strategy = Hessian.EXACT
     else:
-        kernels = SumKernels(layout, objective, stability_margin, Xs, Xds, coef, norm,
-                             compile=compile, hessian=strategy == "exact",
-                             threads=1 if constrained else None, blocked=not constrained)
+        kernels = SumKernels(layout, settings.objective, margin, Xs, Xds, coef, norm,
+                             compile=settings.compile, hessian=strategy is Hessian.EXACT,
+                             threads=1 if settings.constrained else None,
+                             blocked=not settings.constrained)
     return SEDSProblem(
-        layout=layout, objective=objective, X=Xs, Xd=Xds, weights=w,
+        layout=layout, settings=settings, X=Xs, Xd=Xds, weights=w,
         position_scale=sx, velocity_scale=sv, target=demos.target.copy(), theta0=theta0,
-        lbx=lbx, ubx=ubx, margin=stability_margin, kernels=kernels,
+        lbx=lbx, ubx=ubx, margin=margin, kernels=kernels,
         objective_function=kernels.casadi_function(), hessian=strategy,
     )
 
 
-#: Hessian options of the learner
-HESSIANS = ("auto", "exact", "limited-memory")
-#: "auto" uses the exact Hessian up to this many parameters. Its per-sample C kernel grows as
+#: ``hessian="auto"`` uses the exact Hessian up to this many parameters. Its per-sample C kernel grows as
 #: P^2 (18k instructions at P = 49, 56k at P = 94, 1.4M at P = 424) and so does its compile time
 #: (2 cores under load: 7 s at P = 49, 24-29 s at P = 75-79, 56 s at P = 94, 111 s at P = 119;
 #: 3-D K = 15, P = 284, ran the compiler for over 8 minutes and 10 GB); above, IPOPT's L-BFGS
@@ -505,13 +513,14 @@ HESSIANS = ("auto", "exact", "limited-memory")
 EXACT_HESSIAN_MAX_PARAMETERS = 80
 
 
-def hessian_strategy(requested: str, n_parameters: int) -> str:
-    """``"exact"`` or ``"limited-memory"`` for a request (``"auto"`` by problem size)."""
-    if requested not in HESSIANS:
-        raise ValueError(f"unknown hessian {requested!r}; valid: {', '.join(HESSIANS)}")
-    if requested != "auto":
+def hessian_strategy(requested: Hessian | str, n_parameters: int) -> Hessian:
+    """``Hessian.EXACT`` or ``Hessian.LIMITED_MEMORY`` for a request (``"auto"`` by problem
+    size)."""
+    requested = Hessian.parse(requested, "hessian")
+    if requested is not Hessian.AUTO:
         return requested
-    return "exact" if n_parameters <= EXACT_HESSIAN_MAX_PARAMETERS else "limited-memory"
+    return (Hessian.EXACT if n_parameters <= EXACT_HESSIAN_MAX_PARAMETERS
+            else Hessian.LIMITED_MEMORY)
 
 
 def check_approach(demos: Demonstrations, X: np.ndarray, Xd: np.ndarray) -> None:

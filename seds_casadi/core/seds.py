@@ -24,21 +24,14 @@ from .demonstrations import Demonstrations
 from .errors import ConvergenceWarning, SolverError, StabilityError
 from .model_selection import bic_n_components
 from .objectives import approach_constraints
-from .parametrization import FORMULATIONS, LYAPUNOV, OBJECTIVES, stability_constraints
-from .problem import (
-    GMMS,
-    HESSIANS,
-    INITS,
-    SPEED_CALIBRATIONS,
-    SEDSProblem,
-    build_problem,
-    direction_weights,
-)
+from .parametrization import stability_constraints
+from .problem import SEDSProblem, build_problem
+from .settings import PARAMETER_CONSTRAINTS, Hessian, SEDSSettings
 from .stable_ds import StableDS
 from .strength import StrengthFactor
 from .user_constraints import UserConstraints
 
-__all__ = ["SEDS", "SEDSProblem", "direction_weights"]
+__all__ = ["SEDS"]
 
 _LOG = logging.getLogger(__name__)
 _OK_STATUS = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
@@ -101,6 +94,14 @@ class _Progress(ca.Callback):
 # ------------------------------------------------------------------ the learner
 class SEDS(RegressorMixin, BaseEstimator):
     """Stable Estimator of Dynamical Systems, in CasADi + IPOPT.
+
+    ``n_components`` may be given by position, every other parameter by keyword. Each parameter's
+    allowed types and values are declared once (``_parameter_constraints``, from
+    :data:`~seds_casadi.core.settings.PARAMETER_CONSTRAINTS`) and checked by :meth:`fit` before
+    any work, together with the settings that do not go together
+    (:meth:`~seds_casadi.core.settings.SEDSSettings.from_params`): a bad value raises a
+    ``ValueError`` (scikit-learn's ``InvalidParameterError``, also a ``TypeError``) naming the
+    parameter and what it accepts.
 
     Parameters
     ----------
@@ -229,17 +230,21 @@ class SEDS(RegressorMixin, BaseEstimator):
         moves the components off the pieces of the motion they stood for.
     solver_options : dict or None, default None
         Extra IPOPT options, by IPOPT's names (``{"mu_strategy": "adaptive"}``; the ``ipopt.``
-        prefix is added), over the learner's own (``_ipopt_options``). Every model is certified
-        after the solve whatever the options. ``mu_strategy="adaptive"`` is measured in
+        prefix is added), over the learner's own (``_ipopt_options``), except
+        ``hessian_approximation``, which ``hessian`` sets. Every model is certified after the
+        solve whatever the options. ``mu_strategy="adaptive"`` is measured in
         ``benchmarks/README.md``: on the ds-opt LASA protocol it cut the median fit time, but
         not on every shape.
     verbose : bool, default False
         Print IPOPT's iteration log.
     """
 
+    _parameter_constraints: dict = PARAMETER_CONSTRAINTS
+
     def __init__(
         self,
-        n_components: int = 5,
+        n_components: int | str = 5,
+        *,
         objective: str = "direction",
         random_state=None,
         omega_lower: float = 1.0,
@@ -290,95 +295,35 @@ class SEDS(RegressorMixin, BaseEstimator):
         self.solver_options = solver_options
         self.verbose = verbose
 
-    def _validated(self) -> dict:
-        """The parameters checked and normalised (raises ValueError/TypeError with a remedy)."""
-        K = self.n_components
-        if isinstance(K, str) and K == "bic":
-            K = 1  # resolved on the data in fit
-        elif isinstance(K, bool) or not isinstance(K, (int, np.integer)):
-            raise TypeError(f"n_components must be an integer or 'bic', got {K!r}")
-        if K < 1:
-            raise ValueError(f"n_components must be at least 1, got {K}")
-        if self.objective not in OBJECTIVES:
-            raise ValueError(f"unknown objective {self.objective!r}; valid: {', '.join(OBJECTIVES)}")
-        if self.init not in INITS:
-            raise ValueError(f"unknown init {self.init!r}; valid: {', '.join(INITS)}")
-        if self.gmm not in GMMS:
-            raise ValueError(f"unknown gmm {self.gmm!r}; valid: {', '.join(GMMS)} ('fixed' "
-                             "keeps the initial GMM and optimises the dynamics only)")
-        if self.lyapunov not in LYAPUNOV:
-            raise ValueError(f"unknown lyapunov {self.lyapunov!r}; valid: {', '.join(LYAPUNOV)}")
-        if self.formulation not in FORMULATIONS:
-            raise ValueError(f"unknown formulation {self.formulation!r}; valid: "
-                             f"{', '.join(FORMULATIONS)}")
-        if self.constraints is not None and not callable(self.constraints):
-            raise TypeError("constraints must be a callable model -> [(g, lower, upper), ...], "
-                            f"got {type(self.constraints).__name__}")
-        if self.gain_limit is not None and not (np.isfinite(self.gain_limit)
-                                                and self.gain_limit > 0):
-            raise ValueError(f"gain_limit must be a positive number or None, got "
-                             f"{self.gain_limit!r}")
-        if self.speed_calibration not in SPEED_CALIBRATIONS:
-            raise ValueError(f"unknown speed_calibration {self.speed_calibration!r}; valid: "
-                             f"{', '.join(SPEED_CALIBRATIONS)}")
-        sk = self.strength_components
-        if sk is not None and (isinstance(sk, bool) or not isinstance(sk, (int, np.integer))
-                               or sk < 1):
-            raise ValueError(f"strength_components must be a positive integer or None, got "
-                             f"{sk!r}")
-        so = self.solver_options
-        if so is not None:
-            if not isinstance(so, dict) or not all(isinstance(k, str) for k in so):
-                raise TypeError("solver_options must be a dict of IPOPT option names to values, "
-                                f"got {so!r}")
-            bad = [k for k, v in so.items()
-                   if isinstance(v, bool) or not isinstance(v, (str, int, float, np.integer,
-                                                                np.floating))]
-            if bad:
-                raise TypeError(f"solver_options values must be strings or numbers; not those "
-                                f"of {bad}")
-        if self.hessian not in HESSIANS:
-            raise ValueError(f"unknown hessian {self.hessian!r}; valid: {', '.join(HESSIANS)}")
-        for name in ("omega_lower", "omega_upper"):
-            v = getattr(self, name)
-            if not (np.isfinite(v) and v > 0):
-                raise ValueError(f"{name} must be a positive finite weight, got {v}")
-        if not (np.isfinite(self.stability_margin) and self.stability_margin > 0):
-            raise ValueError(f"stability_margin must be positive, got {self.stability_margin}")
-        if int(self.max_iter) < 1:
-            raise ValueError(f"max_iter must be at least 1, got {self.max_iter}")
-        if not (np.isfinite(self.tol) and self.tol > 0):
-            raise ValueError(f"tol must be positive, got {self.tol}")
-        toc = self.tol_objective_change
-        if not (np.isfinite(toc) and toc >= 0):
-            raise ValueError(f"tol_objective_change must be >= 0, got {toc}")
-        u = self.approach_direction
-        if u is not None:
-            u = np.asarray(u, dtype=float).ravel()
-            if not (np.all(np.isfinite(u)) and np.linalg.norm(u) > 0):
-                raise ValueError("approach_direction must be a finite non-zero vector")
-            u = u / np.linalg.norm(u)
-        if not (np.isfinite(self.approach_ratio) and self.approach_ratio >= 1):
-            raise ValueError(f"approach_ratio must be >= 1, got {self.approach_ratio}")
-        return {"n_components": int(K), "max_iter": int(self.max_iter),
-                "tol_objective_change": float(toc) if toc else 1e20, "approach_direction": u}
+    def _settings(self, demos) -> SEDSSettings:
+        """The settings of a fit from the parameters (checked by ``_validate_params`` first),
+        checked together and against the data's dimension (``n_components`` None for
+        ``"bic"``)."""
+        return SEDSSettings.from_params(
+            self.get_params(deep=False),
+            n_dims=demos.n_dims if isinstance(demos, Demonstrations) else None)
 
     def build_problem(self, demos: Demonstrations, n_components: int | None = None
                       ) -> SEDSProblem:
         """Scale the data, initialise by k-means + EM and build the CasADi problem (to solve,
         or to inspect: objective, gradient and Hessian at any parameter vector).
 
-        ``n_components`` overrides the learner's (needed when it is ``"bic"``)."""
-        params = self._validated()
-        K = params["n_components"] if n_components is None else int(n_components)
-        if n_components is None and isinstance(self.n_components, str) and \
-                isinstance(demos, Demonstrations):
-            Xs, Xd, _, _ = demos.stacked()
-            K = bic_n_components(Xs, Xd, random_state=self.random_state)[0]
-        return build_problem(demos, K, self.objective, self.omega_lower,
-                             self.omega_upper, self.stability_margin, self.random_state,
-                             self.compile, self.hessian, self.lyapunov, self.formulation,
-                             self.gain_limit, self.init, self.gmm)
+        ``n_components`` overrides the learner's (with ``"bic"``, K is otherwise chosen on the
+        data as :meth:`fit` does)."""
+        self._validate_params()
+        settings = self._settings(demos)
+        if n_components is not None:
+            settings = settings.with_components(int(n_components))
+        elif settings.problem.n_components is None and isinstance(demos, Demonstrations):
+            settings = self._choose_components(demos, settings)[0]
+        return build_problem(demos, settings.problem)
+
+    def _choose_components(self, demos: Demonstrations, settings: SEDSSettings
+                           ) -> tuple[SEDSSettings, np.ndarray]:
+        """K by BIC (``n_components="bic"``): the settings with K, and the BIC curve."""
+        Xs, Xd, _, _ = demos.stacked()
+        K, bic = bic_n_components(Xs, Xd, random_state=settings.problem.random_state)
+        return settings.with_components(K), bic
 
     def fit(self, X, y=None, target=None) -> SEDS:
         """Learn a certified globally stable DS from demonstrations.
@@ -403,19 +348,22 @@ class SEDS(RegressorMixin, BaseEstimator):
 
         Raises
         ------
+        ValueError, TypeError
+            A parameter out of its declared range, or settings that do not go together (before
+            any work; scikit-learn's ``InvalidParameterError`` is both).
         SolverError
             IPOPT failed (or did not converge and ``require_convergence`` is set).
         StabilityError
             The solution failed the Eq. 10 certificate (never expected by construction; the check
             is there so that an uncertified model can never be returned).
         """
+        self._validate_params()
         demos = _as_demonstrations(X, y, target)
-        params = self._validated()
+        settings = self._settings(demos)
         bic = None
-        if isinstance(self.n_components, str):
-            Xs, Xd, _, _ = demos.stacked()
-            params["n_components"], bic = bic_n_components(Xs, Xd, random_state=self.random_state)
-        self.model_ = self._solve(demos, params)
+        if settings.problem.n_components is None:
+            settings, bic = self._choose_components(demos, settings)
+        self.model_ = self._solve(demos, settings)
         if bic is not None:
             self.model_.fit_info["bic"] = bic.tolist()
         self.fit_info_ = self.model_.fit_info
@@ -447,20 +395,22 @@ class SEDS(RegressorMixin, BaseEstimator):
             raise NotFittedError("this SEDS learner is not fitted yet: call fit(demos) first")
         return model
 
-    def _ipopt_options(self, params: dict, hessian: str, constrained: bool = False) -> dict:
+    @staticmethod
+    def _ipopt_options(settings: SEDSSettings, hessian: Hessian, constrained: bool = False
+                       ) -> dict:
         opts = {
             "print_time": False,
-            "ipopt.print_level": 5 if self.verbose else 0,
+            "ipopt.print_level": 5 if settings.verbose else 0,
             "ipopt.sb": "yes",
-            "ipopt.max_iter": params["max_iter"],
-            "ipopt.tol": self.tol,
+            "ipopt.max_iter": settings.max_iter,
+            "ipopt.tol": settings.tol,
             # only simple bounds and an interior start: a small initial barrier parameter saves
             # about 40 % of the iterations on LASA at the same accuracy (measured, see README)
             "ipopt.mu_init": 1e-4,
             "ipopt.acceptable_tol": 1e-2,
-            "ipopt.acceptable_obj_change_tol": params["tol_objective_change"],
+            "ipopt.acceptable_obj_change_tol": settings.ipopt_objective_change_tol,
             "ipopt.acceptable_iter": 5,
-            "ipopt.hessian_approximation": hessian,
+            "ipopt.hessian_approximation": hessian.value,
         }
         if constrained:
             # Eq. 10 as constraints, the arrival constraint or the user's: IPOPT's iterates
@@ -469,67 +419,66 @@ class SEDS(RegressorMixin, BaseEstimator):
             # once stopped 5e-5 infeasible)
             opts["ipopt.constr_viol_tol"] = 1e-9
             opts["ipopt.acceptable_constr_viol_tol"] = 1e-9
-        for k, v in (self.solver_options or {}).items():
+        for k, v in settings.solver_options.items():
             opts[k if k.startswith("ipopt.") else f"ipopt.{k}"] = v
         return opts
 
-    def _constraints(self, prob: SEDSProblem, params: dict, theta_sym
+    @staticmethod
+    def _constraints(prob: SEDSProblem, settings: SEDSSettings, theta_sym
                      ) -> tuple[list, list, list, UserConstraints | None]:
         """Constraints of the NLP: the optional arrival constraint, Eq. 10 in the constrained
         form, the user's own; as (expressions, lbg, ubg, user)."""
         g, lb, ub = [], [], []
-        u = params["approach_direction"]
+        u = settings.approach_direction
         d = prob.layout.d
         if u is not None:
-            if u.shape != (d,):
-                raise ValueError(f"approach_direction has {u.shape[0]} entries for {d}-D "
-                                 "demonstrations")
-            fa = approach_constraints(prob.layout, prob.margin, u, self.approach_ratio)
+            fa = approach_constraints(prob.layout, prob.margin, u, settings.approach_ratio)
             g.append(fa(theta_sym))
             lb.append(np.zeros(2 * (d - 1)))
             ub.append(np.r_[np.zeros(d - 1), np.full(d - 1, np.inf)])
-        if prob.layout.formulation == "constrained":
+        if prob.layout.constrained:
             fs, lbs, ubs = stability_constraints(prob.layout, prob.margin)
             g.append(fs(theta_sym))
             lb.append(lbs)
             ub.append(ubs)
         user = None
-        if self.constraints is not None:
-            user = UserConstraints(self.constraints, prob)
+        if settings.constraints is not None:
+            user = UserConstraints(settings.constraints, prob)
             g.append(user.of_theta(theta_sym))
             lb.append(user.lower)
             ub.append(user.upper)
         return g, lb, ub, user
 
-    def _solve(self, demos: Demonstrations, params: dict) -> StableDS:
+    def _solve(self, demos: Demonstrations, settings: SEDSSettings) -> StableDS:
         t0 = time.perf_counter()
+        ps = settings.problem
         strength = radius = None  # first: data it cannot use is refused before the long solve
-        if self.objective == "direction" and self.speed_calibration == "strength":
-            strength, radius = self._fit_strength(demos, params["n_components"])
-        prob = self.build_problem(demos, params["n_components"])
+        if settings.fits_strength:
+            strength, radius = self._fit_strength(demos, settings)
+        prob = build_problem(demos, ps)
         theta_sym = ca.MX.sym("theta", prob.layout.size)
         objective = prob.kernels.nlp_objective()  # keep alive while the solver runs
         nlp = {"x": theta_sym, "f": objective(theta_sym)}
-        g, lbg, ubg, user = self._constraints(prob, params, theta_sym)
+        g, lbg, ubg, user = self._constraints(prob, settings, theta_sym)
         bounds = {}
         if g:
             nlp["g"] = ca.vertcat(*g)
             bounds = {"lbg": np.concatenate(lbg), "ubg": np.concatenate(ubg)}
-        label = (f"SEDS fit ({self.objective}, K={prob.layout.K}, d={prob.layout.d}, "
+        label = (f"SEDS fit ({ps.objective}, K={prob.layout.K}, d={prob.layout.d}, "
                  f"{prob.layout.formulation}, P {prob.layout.lyapunov}, "
                  f"{prob.X.shape[0]} samples, {prob.layout.size} parameters, "
                  f"{prob.hessian} Hessian)")
         _LOG.info("%s: solving with IPOPT (problem built in %.1f s)", label,
                   time.perf_counter() - t0)
         progress = _Progress(prob.layout.size, int(nlp["g"].numel()) if "g" in nlp else 0, label)
-        opts = dict(self._ipopt_options(params, prob.hessian, constrained=bool(g)),
+        opts = dict(self._ipopt_options(settings, prob.hessian, constrained=bool(g)),
                     iteration_callback=progress)
         try:
             solver = ca.nlpsol("seds", "ipopt", nlp, opts)
         except RuntimeError as exc:
-            if self.solver_options and "option" in str(exc).lower():  # IPOPT printed the valid
-                # settings of a bad value above
-                raise ValueError(f"IPOPT refused solver_options {self.solver_options!r}: "
+            if settings.solver_options and "option" in str(exc).lower():  # IPOPT printed the
+                # valid settings of a bad value above
+                raise ValueError(f"IPOPT refused solver_options {dict(settings.solver_options)!r}: "
                                  f"{str(exc).splitlines()[-1].split(': ', 1)[-1]} (names as "
                                  "in IPOPT's documentation, e.g. 'mu_strategy')") from None
             raise
@@ -544,7 +493,7 @@ class SEDS(RegressorMixin, BaseEstimator):
         converged = status in _OK_STATUS
         if not converged:
             msg = f"IPOPT stopped without converging after {stats.get('iter_count')} iterations"
-            if self.require_convergence:
+            if settings.require_convergence:
                 raise SolverError(msg, status)
             warnings.warn(f"{msg} (status {status}); the model is certified stable but may fit "
                           "poorly. Raise max_iter or check the data.", ConvergenceWarning,
@@ -552,42 +501,42 @@ class SEDS(RegressorMixin, BaseEstimator):
         _LOG.info("%s: %s after %d iterations, %.1f s", label, status,
                   int(stats.get("iter_count", -1)), time.perf_counter() - t0)
         try:
-            c = (prob.speed_factor(theta, self.speed_calibration)
-                 if self.objective == "direction" else 1.0)
+            c = (prob.speed_factor(theta, settings.speed_calibration)
+                 if settings.speed_calibration is not None else 1.0)
             priors, means, covs = prob.to_model_arrays(theta, speed_factor=c)
         except np.linalg.LinAlgError:
             raise SolverError(
                 "the solution has a numerically singular covariance (a component collapsed "
                 f"onto a subspace of the {prob.layout.d}-D data); use fewer components, more or "
                 "less redundant data, or hessian='exact'", status) from None
-        lyap = prob.lyapunov_matrix(theta) if prob.layout.lyapunov == "learned" else None
+        lyap = prob.lyapunov_matrix(theta) if ps.learned_lyapunov else None
         viol = 0.0
         if g:
             gv = np.asarray(ca.Function("g", [theta_sym], [nlp["g"]])(theta)).ravel()
             viol = float(np.max(np.r_[0.0, bounds["lbg"] - gv, gv - bounds["ubg"]]))
         info = {
             "status": status, "success": converged,
-            "lyapunov": prob.layout.lyapunov, "formulation": prob.layout.formulation,
-            "init": self.init, "gmm": self.gmm,
+            "lyapunov": ps.lyapunov.value, "formulation": ps.formulation.value,
+            "init": ps.init.value, "gmm": ps.gmm.value,
             "constraint_violation": viol,
             "iterations": int(stats.get("iter_count", -1)), "objective": J,
             "objective_initial": prob.kernels.value(prob.theta0),
-            "objective_name": self.objective, "seconds": time.perf_counter() - t0,
+            "objective_name": ps.objective.value, "seconds": time.perf_counter() - t0,
             "seconds_solve": time.perf_counter() - t_built, "n_parameters": prob.layout.size,
-            "speed_factor": c, "n_components": params["n_components"],
-            "speed_calibration": (self.speed_calibration if self.objective == "direction"
-                                  else None),
+            "speed_factor": c, "n_components": ps.n_components,
+            "speed_calibration": (None if settings.speed_calibration is None
+                                  else settings.speed_calibration.value),
             "strength_components": None if strength is None else len(strength.priors),
-            "n_samples": int(prob.X.shape[0]), "hessian": prob.hessian,
+            "n_samples": int(prob.X.shape[0]), "hessian": prob.hessian.value,
             "compiled_kernels": prob.kernels.compiled, "sums": prob.kernels.engine,
             "solver": "ipopt",
-            "solver_options": dict(self.solver_options or {}),
+            "solver_options": dict(settings.solver_options),
         }
         try:
             model = StableDS(priors, means, covs, prob.target, fit_info=info, status=status,
                              lyapunov=lyap, strength=strength, strength_radius=radius)
         except StabilityError as exc:
-            if prob.layout.formulation != "constrained":
+            if not ps.constrained:
                 raise
             raise SolverError(
                 f"the constrained form ended at a point that violates Eq. 10 ({exc}; largest "
@@ -598,7 +547,9 @@ class SEDS(RegressorMixin, BaseEstimator):
             model.fit_info["user_constraint_violation"] = user.check(model, status)
         return model
 
-    def _fit_strength(self, demos: Demonstrations, K: int) -> tuple[StrengthFactor, float]:
+    @staticmethod
+    def _fit_strength(demos: Demonstrations, settings: SEDSSettings
+                      ) -> tuple[StrengthFactor, float]:
         """The strength factor (Eq. 12 in log speed) on the demonstrations' moving samples, and
         the taper radius r: :data:`STRENGTH_RADIUS` times the data's extent, or, if more, the
         distance covered at v(x*) in :data:`STRENGTH_STEPS` of the data's time steps (so that
@@ -616,9 +567,10 @@ class SEDS(RegressorMixin, BaseEstimator):
                 f"positions needs at least {need}; check the velocities, or use "
                 "speed_calibration='median'")
         X = Xs[moving] + demos.target
-        Ksf = max(1, min(int(self.strength_components or K), n // need))
+        K = settings.strength_components or settings.problem.n_components
+        Ksf = max(1, min(int(K), n // need))
         sf = StrengthFactor.fit(X, speed[moving], n_components=Ksf,
-                                random_state=self.random_state)
+                                random_state=settings.problem.random_state)
         extent = max(float(np.max(np.ptp(Xs, axis=0))), 1e-12)
         radius = STRENGTH_RADIUS * extent
         if demos.time_ordered:  # trajectories in time order have a step

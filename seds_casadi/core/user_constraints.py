@@ -17,6 +17,7 @@ import numpy as np
 
 from .errors import SolverError
 from .parametrization import unpack_casadi
+from .settings import Objective
 
 __all__ = ["UserConstraints", "TOLERANCE"]
 
@@ -76,7 +77,7 @@ class UserConstraints:
         th = ca.SX.sym("theta", layout.size)
         p = unpack_casadi(th, layout, prob.margin)
         pri = ca.exp(ca.vertcat(*p["logpi"]))
-        if layout.formulation == "constrained":
+        if layout.constrained:
             pri = pri / ca.sum1(pri)
         mu = [m * sx + ca.DM(prob.target) for m in p["mu"]]
         A = [a * (sv / sx) for a in p["A"]]
@@ -98,9 +99,11 @@ class UserConstraints:
         viol = float(np.max(np.r_[0.0, self.lower - g, g - self.upper]))
         if viol > TOLERANCE:
             worst = int(np.argmax(np.maximum(self.lower - g, g - self.upper)))
+            hint = ("; with the direction objective the gains are rescaled after the solve: use "
+                    "objective='mse' for constraints on them"
+                    if self._prob.objective is Objective.DIRECTION else "")
             raise SolverError(
                 f"the fitted model violates user constraint entry {worst} by {viol:.3g} "
-                f"(value {g[worst]:.6g}, bounds [{self.lower[worst]:g}, {self.upper[worst]:g}]); "
-                "with the direction objective the gains are rescaled after the solve: use "
-                "objective='mse' for constraints on them", status)
+                f"(value {g[worst]:.6g}, bounds [{self.lower[worst]:g}, {self.upper[worst]:g}])"
+                + hint, status)
         return viol
