@@ -409,3 +409,28 @@ def test_wall_contacts_are_counted_and_banks_can_be_left_out_of_a_success_map():
     r = simulate_shots(f, np.tile(ball, (A.size, 1)), stroke.launch_velocity(A.ravel(), K.ravel()))
     np.testing.assert_array_equal(direct.ravel(), r.sunk & (r.wall_contacts == 0))
     assert (with_banks & ~direct).any()  # this field has bank shots, and they were left out
+
+
+@pytest.mark.parametrize("name", ["flat", "arctan", "double_hill"])
+@pytest.mark.parametrize("engine", ["numpy", "compiled"])
+def test_stopping_at_walls_keeps_every_direct_shot_and_ends_the_others(name, engine):
+    # the teacher without banks counts only shots that sink before any wall contact: ending a
+    # shot at its first contact must leave exactly those unchanged, on both engines
+    f = load_field(name)
+    B, V = _aimed_shots(f, 400, 11)
+    V = V * 1.6   # fast enough that many reach the far wall
+    full = simulate_shots(f, B, V, engine=engine)
+    cut = simulate_shots(f, B, V, engine=engine, stop_at_walls=True)
+    direct = full.wall_contacts == 0
+    assert (~direct).sum() > 20 and (full.sunk & direct).any() or name == "arctan"
+    np.testing.assert_array_equal(cut.sunk & (cut.wall_contacts == 0), full.sunk & direct)
+    np.testing.assert_array_equal(cut.wall_contacts == 0, direct)
+    np.testing.assert_allclose(cut.final_position[direct], full.final_position[direct],
+                               atol=1e-12)
+    np.testing.assert_array_equal(cut.stopped[direct], full.stopped[direct])
+    # the others ended no later than before, none of them reported stopped or out
+    walled = ~direct & ~full.sunk
+    assert np.all(cut.time[walled] <= full.time[walled] + 1e-9)
+    if engine == "numpy":   # checked every step (the compiled engine every 0.5 s)
+        assert not (cut.stopped[walled] | cut.out[walled]).any()
+    assert cut.time[walled].sum() < 0.8 * full.time[walled].sum()

@@ -99,7 +99,7 @@ def capture_speed(offset, hole_radius: float, ball_radius: float = BALL_RADIUS) 
 
 def simulate_shots(field: Field, ball_xy, launch_velocity, dt: float = 0.01,
                    max_time: float = 20.0, record_paths: bool = False,
-                   engine: str = "auto", hole=None) -> ShotResult:
+                   engine: str = "auto", hole=None, stop_at_walls: bool = False) -> ShotResult:
     """Simulate many shots at once.
 
     Parameters
@@ -120,6 +120,13 @@ def simulate_shots(field: Field, ball_xy, launch_velocity, dt: float = 0.01,
     engine : {"auto", "compiled", "numpy"}
         "auto" uses the compiled engine for batches of more than a few shots when a C compiler
         is available (and always when paths are not needed), else numpy.
+    stop_at_walls : bool, default False
+        End a shot at its first wall contact (for searches that count only direct shots: a
+        shot that touched a wall is no success then, and the rest of its roll, the longest
+        part of a fast shot's, need not be simulated). Such a shot ends at the next check (every
+        step on the numpy engine, every 0.5 s on the compiled one): unless it sank, stopped or
+        left before that check, it is reported as none of them, at the check's position and
+        time, with its wall contacts. Shots without a wall contact are unchanged.
 
     Returns
     -------
@@ -140,8 +147,8 @@ def simulate_shots(field: Field, ball_xy, launch_velocity, dt: float = 0.01,
     Hh = _holes(field, hole, len(P))
     dt = dt / substeps(field, U, dt)
     if engine == "compiled":
-        return ball_kernel(field, dt).run(P, U, max_time, Hh)
-    return _simulate_numpy(field, P, U, Hh, dt, max_time, record_paths)
+        return ball_kernel(field, dt).run(P, U, max_time, Hh, stop_at_walls)
+    return _simulate_numpy(field, P, U, Hh, dt, max_time, record_paths, stop_at_walls)
 
 
 #: largest turn of the velocity by the surface's curvature within one step [rad]
@@ -194,7 +201,8 @@ def _holes(field: Field, hole, n: int) -> np.ndarray:
 
 # ------------------------------------------------------------------ numpy engine (the reference)
 def _simulate_numpy(field: Field, P: np.ndarray, U: np.ndarray, Hh: np.ndarray, dt: float,
-                    max_time: float, record_paths: bool) -> ShotResult:
+                    max_time: float, record_paths: bool,
+                    stop_at_walls: bool = False) -> ShotResult:
     """The numpy engine: steps every moving shot until all are done or the time is up; P and U
     (n, 2) are advanced in place."""
     n = len(P)
@@ -227,6 +235,9 @@ def _simulate_numpy(field: Field, P: np.ndarray, U: np.ndarray, Hh: np.ndarray, 
         stopped[idx[done_stop]] = True
         fin = done_sunk | done_out | done_stop
         t_end[idx[fin]] = t
+        if stop_at_walls:   # ended by its wall contact: neither sunk, out nor stopped
+            fin = fin | (walls[idx] > 0)
+            t_end[idx[(walls[idx] > 0) & ~(done_sunk | done_out | done_stop)]] = t
         active[idx[fin]] = False
         if record_paths:
             for i in idx:

@@ -229,10 +229,11 @@ class BallKernel:
         self.compiled = self._big.class_name() == "External"
 
     def run(self, P: np.ndarray, U: np.ndarray, max_time: float = 20.0,
-            hole: np.ndarray | None = None) -> ShotResult:
+            hole: np.ndarray | None = None, stop_at_walls: bool = False) -> ShotResult:
         """Simulate shots from positions P (n, 2) with launch velocities U (n, 2) and holes
-        ``hole`` (n, 2; default the field's). Inputs are not validated here: use
-        :func:`~seds_casadi.minigolf.ball.simulate_shots`."""
+        ``hole`` (n, 2; default the field's); with ``stop_at_walls`` a shot ends at the first
+        check (every ``steps_per_call`` steps) after a wall contact. Inputs are not validated
+        here: use :func:`~seds_casadi.minigolf.ball.simulate_shots`."""
         n = len(P)
         S = np.zeros((STATE_SIZE, n))
         S[8:10] = (np.tile(self.field.hole, (n, 1)) if hole is None else hole).T
@@ -241,12 +242,12 @@ class BallKernel:
         S[4:6] = U.T  # no spin at the impact: the contact point slips at the ball's speed
         S[_MID:_MID + 2] = (P + 0.5 * self.dt * U).T
         if self._simd is not None:
-            self._run_simd(S, max_time)
+            self._run_simd(S, max_time, stop_at_walls)
         else:
-            self._run_casadi(S, max_time)
-        return self._result(S, max_time)
+            self._run_casadi(S, max_time, stop_at_walls)
+        return self._result(S, max_time, stop_at_walls)
 
-    def _run_simd(self, S: np.ndarray, max_time: float) -> None:
+    def _run_simd(self, S: np.ndarray, max_time: float, stop_at_walls: bool = False) -> None:
         # blocks stop once all their shots are done; between calls the finished shots are
         # dropped so that the blocks stay full of moving ones
         left = int(np.ceil(max_time / self.dt - 1e-9))
@@ -257,9 +258,10 @@ class BallKernel:
             self._simd.run(X, k)
             S[:, active] = X
             left -= k
-            active = active[X[_STATUS] == 0]
+            moving = X[_STATUS] == 0
+            active = active[moving & (X[10] == 0) if stop_at_walls else moving]
 
-    def _run_casadi(self, S: np.ndarray, max_time: float) -> None:
+    def _run_casadi(self, S: np.ndarray, max_time: float, stop_at_walls: bool = False) -> None:
         active = np.arange(S.shape[1])
         nb, ns = self.batches
         t_call = self.steps_per_call * self.dt
@@ -277,12 +279,15 @@ class BallKernel:
                 out[:, c:c + ns] = np.asarray(self._small(X[:, c:c + ns]))
             S[:, active] = out[:, :active.size]
             elapsed += t_call
-            active = active[S[_STATUS, active] == 0]
+            moving = S[_STATUS, active] == 0
+            active = active[moving & (S[10, active] == 0) if stop_at_walls else moving]
 
     @staticmethod
-    def _result(S: np.ndarray, max_time: float) -> ShotResult:
+    def _result(S: np.ndarray, max_time: float, stop_at_walls: bool = False) -> ShotResult:
         # a shot still rolling at the limit, or past it within the last call
         over = (S[7] > max_time + 1e-9) | (S[_STATUS] == 0)
         status = np.where(over, 0, S[_STATUS]).astype(int)
+        # a shot ended by a wall contact keeps the time of the check that ended it
+        walled = stop_at_walls & (S[_STATUS] == 0) & (S[10] > 0) & (S[7] <= max_time + 1e-9)
         return ShotResult(status == 1, status == 2, status == 3, S[0:2].T.copy(),
-                          np.where(over, max_time, S[7]), None, S[10].astype(int))
+                          np.where(over & ~walled, max_time, S[7]), None, S[10].astype(int))

@@ -106,8 +106,9 @@ def success_map(field: Field, stroke: Stroke, ball, hole, alphas, kappas,
     kappas = np.asarray(kappas, dtype=float).ravel()
     A, K = np.meshgrid(alphas, kappas)
     V = stroke.launch_velocity(A.ravel(), K.ravel())
+    # without banks a shot that touched a wall is no success: its roll ends there
     res = simulate_shots(field, np.tile(np.asarray(ball, float), (len(V), 1)), V, hole=hole,
-                         engine=engine)
+                         engine=engine, stop_at_walls=not banks)
     ok = res.sunk if banks else res.sunk & (res.wall_contacts == 0)
     return ok.reshape(K.shape)
 
