@@ -13,6 +13,9 @@ function's instruction list, so it computes exactly the same expression as the C
 (up to the compiler's floating-point contractions and the vector math library's exp/log, which
 are within a few ulp).
 
+The translator of an SX Function's instructions into C statements (:func:`instruction_lines`)
+is shared with :mod:`seds_casadi.codegen.column_sum`.
+
 Used by :class:`seds_casadi.minigolf.ball_kernel.BallKernel`; falls back to CasADi's kernel when
 there is no C compiler, the step uses an operation not translated here (e.g. an interpolant
 call), or the compiler fails.
@@ -30,7 +33,8 @@ import numpy as np
 
 from .cache import CompileError, shared_library
 
-__all__ = ["simd_source", "SimdLoop", "UnsupportedOperation"]
+__all__ = ["simd_source", "SimdLoop", "UnsupportedOperation", "instruction_lines", "VECTOR_MATH",
+           "cpu_key", "load_library"]
 
 _LOCK = threading.Lock()
 _LOADED: dict[str, ctypes.CDLL] = {}
@@ -51,7 +55,7 @@ _UNARY = {ca.OP_NEG: "-{0}", ca.OP_SQ: "{0} * {0}", ca.OP_TWICE: "2.0 * {0}",
           ca.OP_NOT: "({0} == 0.0 ? 1.0 : 0.0)", ca.OP_INV: "1.0 / {0}",
           ca.OP_FLOOR: "floor({0})", ca.OP_ASSIGN: "{0}"}
 # math functions glibc's libmvec has AVX2 versions of (declared below so GCC may call them)
-_VECTOR_MATH = ("exp", "log", "sin", "cos", "tan", "atan", "tanh", "pow", "atan2")
+VECTOR_MATH = ("exp", "log", "sin", "cos", "tan", "atan", "tanh", "pow", "atan2")
 
 
 class UnsupportedOperation(ValueError):
@@ -80,7 +84,7 @@ def simd_source(step: ca.Function, name: str, done_index: int | None = None,
     """
     _check_step(step, lookup)
     body = _lookup_lines(lookup) if lookup else []
-    lines, used = _instruction_lines(step)
+    lines, used = instruction_lines(step)
     return _loop_source(step, name, block, done_index, body + lines, used)
 
 
@@ -131,7 +135,7 @@ def _step_write(res: int, nz: int) -> str:
     return f"o{nz}"
 
 
-def _instruction_lines(step: ca.Function, read=_step_read, write=_step_write
+def instruction_lines(step: ca.Function, read=_step_read, write=_step_write
                        ) -> tuple[list[str], set[str]]:
     """One C statement per instruction of the SX Function (work variables ``w``), and the
     vector math functions they call. ``read(arg, nz)`` and ``write(res, nz)`` give the C
@@ -158,7 +162,7 @@ def _instruction_lines(step: ca.Function, read=_step_read, write=_step_write
         else:
             names = {getattr(ca, n): n for n in dir(ca) if n.startswith("OP_")}
             raise UnsupportedOperation(f"operation {names.get(op, op)} is not translated")
-        used.update(f for f in _VECTOR_MATH if f + "(" in body[-1])
+        used.update(f for f in VECTOR_MATH if f + "(" in body[-1])
     return body, used
 
 
@@ -212,7 +216,9 @@ def load_library(path: str) -> ctypes.CDLL:
         return lib
 
 
-def _cpu_key() -> str:
+def cpu_key() -> str:
+    """A short hash of the CPU's feature flags: the cache key of code compiled with
+    ``-march=native`` (a library built for one CPU is not loaded on another)."""
     try:
         with open("/proc/cpuinfo") as fh:
             flags = next((ln for ln in fh if ln.startswith("flags")), "")
@@ -263,7 +269,7 @@ class SimdLoop:
         self.threads = max(1, int(threads))
         libs = ("-lmvec", "-lm") if "declare simd" in src else ("-lm",)
         try:
-            path = shared_library(src.encode(), "simd", self.FLAGS, libs, key_extra=_cpu_key())
+            path = shared_library(src.encode(), "simd", self.FLAGS, libs, key_extra=cpu_key())
         except CompileError as exc:
             raise RuntimeError(f"compiling the SIMD loop failed: {exc}") from None
         fn = getattr(load_library(path), name)

@@ -8,18 +8,23 @@ import tempfile
 from collections.abc import Iterable
 
 
-def _umask() -> int:
+def umask() -> int:
     """The process's umask (read by setting and restoring it)."""
     mask = os.umask(0o022)
     os.umask(mask)
     return mask
 
 
+# the old private name, still imported by app/replay.py: removed by the game-layer change
+# (it imports umask)
+_umask = umask
+
+
 def _public(fd: int) -> None:
     """Give a temporary file (``mkstemp`` makes it 0600) the mode a plain ``open`` would:
     0666 minus the umask (0644 under the usual umask 022)."""
     try:
-        os.fchmod(fd, 0o666 & ~_umask())
+        os.fchmod(fd, 0o666 & ~umask())
     except (AttributeError, OSError):  # no fchmod (Windows) or a file system without modes
         pass
 

@@ -126,33 +126,37 @@ class HittingDataset:
         :class:`~seds_casadi.ModelFileError` naming the file and the entry."""
         path = os.fspath(path)
         a, meta, _ = read_guarded(path, DATASET_FORMAT, (DATASET_VERSION,), _SCHEMA)
-        return _validated(path, a, meta)
+        return cls.from_arrays(a, meta, path)
 
 
-def _validated(path: str, a: dict, meta: dict) -> HittingDataset:
-    """A data set from a guarded file's arrays and meta, re-validated."""
-    n = len(a["alpha_deg"])
-    if not (a["ball"].shape == a["hole"].shape == (n, 2) and a["kappa"].shape == (n,)
-            and a["labels"].shape == (n,)):
-        raise ModelFileError(f"{path}: not a hitting data set (arrays of different lengths)")
-    if np.any(a["kappa"] <= 0) or np.any(np.abs(a["alpha_deg"]) > 180):
-        raise ModelFileError(f"{path}: speed gains must be positive and angles within +-180 deg")
-    if np.any(a["labels"] < 0):
-        raise ModelFileError(f"{path}: entry 'labels' holds negative strategy labels")
-    try:
-        st = meta["stroke"]
-        stroke = Stroke.from_dict(st)
-        strategy, field_name = meta["strategy"], meta["field"]
-        if strategy not in TEACHER_STRATEGIES or not isinstance(field_name, str):
-            raise ValueError(f"unknown strategy {strategy!r} or field {field_name!r}")
-        dropped = meta["dropped"]
-        if not isinstance(dropped, int) or dropped < 0:
-            raise ValueError(f"'dropped' must be a count, got {dropped!r}")
-        declared = meta.get("situations", {})
-        if not isinstance(declared, dict):
-            raise ValueError("'situations' must be an object")
-    except (KeyError, TypeError, ValueError) as exc:
-        raise ModelFileError(f"{path}: entry 'meta' is not a valid hitting data set "
-                             f"({type(exc).__name__}: {exc})") from None
-    return HittingDataset(field_name, strategy, a["ball"], a["hole"], np.deg2rad(a["alpha_deg"]),
-                          a["kappa"], stroke, dropped, a["labels"], declared)
+    @classmethod
+    def from_arrays(cls, a: dict, meta: dict, source: str) -> HittingDataset:
+        """A data set from the arrays and the meta of a saved file (``ball``, ``hole``,
+        ``alpha_deg``, ``kappa``, ``labels``; ``field``, ``strategy``, ``dropped``, ``stroke``,
+        ``situations`` as :meth:`save` writes them), re-validated; anything wrong raises
+        :class:`~seds_casadi.ModelFileError` naming ``source`` (the file)."""
+        n = len(a["alpha_deg"])
+        if not (a["ball"].shape == a["hole"].shape == (n, 2) and a["kappa"].shape == (n,)
+                and a["labels"].shape == (n,)):
+            raise ModelFileError(f"{source}: not a hitting data set (arrays of different lengths)")
+        if np.any(a["kappa"] <= 0) or np.any(np.abs(a["alpha_deg"]) > 180):
+            raise ModelFileError(f"{source}: speed gains must be positive and angles within "
+                                 "+-180 deg")
+        if np.any(a["labels"] < 0):
+            raise ModelFileError(f"{source}: entry 'labels' holds negative strategy labels")
+        try:
+            stroke = Stroke.from_dict(meta["stroke"])
+            strategy, field_name = meta["strategy"], meta["field"]
+            if strategy not in TEACHER_STRATEGIES or not isinstance(field_name, str):
+                raise ValueError(f"unknown strategy {strategy!r} or field {field_name!r}")
+            dropped = meta["dropped"]
+            if not isinstance(dropped, int) or dropped < 0:
+                raise ValueError(f"'dropped' must be a count, got {dropped!r}")
+            declared = meta.get("situations", {})
+            if not isinstance(declared, dict):
+                raise ValueError("'situations' must be an object")
+        except (KeyError, TypeError, ValueError) as exc:
+            raise ModelFileError(f"{source}: entry 'meta' is not a valid hitting data set "
+                                 f"({type(exc).__name__}: {exc})") from None
+        return cls(field_name, strategy, a["ball"], a["hole"], np.deg2rad(a["alpha_deg"]),
+                   a["kappa"], stroke, dropped, a["labels"], declared)

@@ -42,6 +42,7 @@ from ..motion.golf import BALL_RADIUS
 from .ball import simulate_shots
 from .fields import Field
 from .hitting_data import HittingDataset
+from .strategy_files import read_strategies, write_strategies
 from .stroke import Stroke
 from .teacher import blurred, true_runs
 
@@ -297,17 +298,17 @@ class StrategySet:
 
     def save(self, path: str | os.PathLike) -> None:
         """Write a guarded ``.npz`` file (:mod:`~seds_casadi.minigolf.strategy_files`)."""
-        from .strategy_files import save_strategies
-
-        save_strategies(path, self)
+        write_strategies(path, self)
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> StrategySet:
         """Read and re-validate a file written by :meth:`save` (a
         :class:`~seds_casadi.ModelFileError` for anything wrong)."""
-        from .strategy_files import load_strategies
-
-        return load_strategies(path)
+        meta, arrays, data = read_strategies(path)
+        strategies = [Strategy(k, w, d, arrays["robustness"][:, k], list(r))
+                      for k, (w, r, d) in enumerate(zip(meta["walls"], meta["routes"], data))]
+        return cls(meta["field"], arrays["ball"], arrays["hole"], strategies, data[0].stroke,
+                   meta["settings"])
 
 
 def _order(S: np.ndarray) -> np.ndarray:

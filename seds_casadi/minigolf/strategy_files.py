@@ -1,6 +1,7 @@
 """The guarded file of a :class:`~seds_casadi.minigolf.strategies.StrategySet`
 (``strategies_<field>.npz``): format, version, checksum (:mod:`seds_casadi.core.model_files`)
-and re-validation on load; angles in degrees.
+and re-validation on load; angles in degrees. ``StrategySet.save`` and ``StrategySet.load`` call
+:func:`write_strategies` and :func:`read_strategies`; this module knows the file, not the class.
 """
 
 from __future__ import annotations
@@ -11,16 +12,17 @@ import numpy as np
 
 from ..core.errors import ModelFileError
 from ..core.model_files import read_guarded, write_guarded
-from .hitting_data import HittingDataset, _validated
+from .hitting_data import HittingDataset
 
-__all__ = ["save_strategies", "load_strategies", "STRATEGIES_FORMAT", "STRATEGIES_VERSION"]
+__all__ = ["write_strategies", "read_strategies", "STRATEGIES_FORMAT", "STRATEGIES_VERSION"]
 
 STRATEGIES_FORMAT = "seds_casadi.StrategySet"
 STRATEGIES_VERSION = 2  # 1: without a checksum (refused)
 
 
-def save_strategies(path: str | os.PathLike, ss) -> None:
-    """Write a strategy set (atomic; no pickle)."""
+def write_strategies(path: str | os.PathLike, ss) -> None:
+    """Write a strategy set (a :class:`~seds_casadi.minigolf.strategies.StrategySet`; atomic;
+    no pickle)."""
     arrays = {"ball": ss.ball, "hole": ss.hole, "robustness": ss.robustness}
     for s in ss.strategies:
         d = s.data
@@ -39,11 +41,20 @@ def _schema(meta: dict) -> dict:
     return out
 
 
-def load_strategies(path: str | os.PathLike):
-    """Read and re-validate a file written by :func:`save_strategies`; anything wrong raises
-    :class:`~seds_casadi.ModelFileError` naming the file."""
-    from .strategies import Strategy, StrategySet
+def read_strategies(path: str | os.PathLike) -> tuple[dict, dict, list[HittingDataset]]:
+    """Read and re-validate a file written by :func:`write_strategies`; anything wrong raises
+    :class:`~seds_casadi.ModelFileError` naming the file.
 
+    Returns
+    -------
+    meta : dict
+        ``field``, ``stroke``, ``settings``, and per strategy its ``walls`` and ``routes``.
+    arrays : dict
+        ``ball``, ``hole`` of the explored situations, shape (n, 2), and ``robustness``, shape
+        (n, n_strategies).
+    data : list of HittingDataset
+        Each strategy's shots (labelled with its index).
+    """
     path = os.fspath(path)
     a, meta, _ = read_guarded(path, STRATEGIES_FORMAT, (STRATEGIES_VERSION,), _schema)
     n, m = len(a["ball"]), len(meta["walls"])
@@ -56,20 +67,17 @@ def load_strategies(path: str | os.PathLike):
     if not (isinstance(routes, list) and len(routes) == m and isinstance(meta.get("settings"),
                                                                           dict)):
         raise ModelFileError(f"{path}: entry 'meta' has no routes per strategy or no settings")
-    strategies = []
-    ds = None
+    if m == 0:
+        raise ModelFileError(f"{path}: the file holds no strategy")
+    data = []
     for k, w in enumerate(walls):
         arrays = {"ball": a[f"s{k}_ball"], "hole": a[f"s{k}_hole"],
                   "alpha_deg": a[f"s{k}_alpha_deg"], "kappa": a[f"s{k}_kappa"],
                   "labels": np.full(len(a[f"s{k}_kappa"]), k)}
-        ds = _validated(path, arrays, {"field": meta["field"], "strategy": "centre",
-                                       "dropped": 0, "stroke": meta["stroke"]})
+        ds = HittingDataset.from_arrays(arrays, {"field": meta["field"], "strategy": "centre",
+                                                 "dropped": 0, "stroke": meta["stroke"]}, path)
         if not (isinstance(w, int) and isinstance(routes[k], list)
                 and len(routes[k]) == len(ds)):
             raise ModelFileError(f"{path}: strategy {k}: walls or routes do not fit its shots")
-        strategies.append(Strategy(k, w, ds, R[:, k], list(routes[k])))
-    if ds is None:
-        raise ModelFileError(f"{path}: the file holds no strategy")
-    data: HittingDataset = ds
-    return StrategySet(meta["field"], a["ball"], a["hole"], strategies, data.stroke,
-                       meta["settings"])
+        data.append(ds)
+    return meta, {"ball": a["ball"], "hole": a["hole"], "robustness": R}, data
