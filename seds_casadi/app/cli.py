@@ -25,8 +25,6 @@ import sys
 import warnings
 from collections.abc import Iterator
 
-__all__ = ["main", "build_parser", "command_logging"]
-
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``seds-casadi``."""

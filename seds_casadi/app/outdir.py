@@ -18,8 +18,6 @@ import fcntl
 import os
 from collections.abc import Iterator
 
-__all__ = ["output_folder", "LOCK_NAME", "sweep_temporary_files"]
-
 #: name of the lock file inside an output folder
 LOCK_NAME = ".seds-casadi.lock"
 

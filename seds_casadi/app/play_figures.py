@@ -9,8 +9,6 @@ import numpy as np
 
 from .plotting import plot_field, pyplot, save_figure
 
-__all__ = ["play_figures", "strategy_figure"]
-
 
 def play_figures(fld, motion, data, fitted: dict, rows: list[dict], learners, out: str,
                  robot: str) -> None:

@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["sklearn_random_state"]
-
 
 def sklearn_random_state(random_state):
     """An int, None, ``RandomState`` or numpy ``Generator`` as a seed scikit-learn accepts.

@@ -22,8 +22,6 @@ import numpy as np
 from ._io import atomic_npz, npz_value_count
 from .errors import ModelFileError
 
-__all__ = ["write_guarded", "read_guarded", "checksum", "numpy_json"]
-
 _RESERVED = ("format", "version", "meta", "checksum")
 #: most values a guarded file may hold (checked from the headers before anything is loaded)
 MAX_VALUES = 100_000_000

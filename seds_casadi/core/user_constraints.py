@@ -19,8 +19,6 @@ from .errors import SolverError
 from .parametrization import unpack_casadi
 from .settings import Objective
 
-__all__ = ["UserConstraints", "TOLERANCE"]
-
 #: largest violation of a user constraint accepted on the returned model (absolute, user units)
 TOLERANCE = 1e-6
 

@@ -12,8 +12,6 @@ import sys
 import time
 from collections.abc import Iterable
 
-__all__ = ["progress_bar", "LOG_EVERY"]
-
 _LOG = logging.getLogger("seds_casadi.progress")
 
 #: seconds between two progress lines when there is no terminal

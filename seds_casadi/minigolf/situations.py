@@ -32,8 +32,6 @@ import numpy as np
 
 from ..motion.golf import BALL_RADIUS
 
-__all__ = ["Placement", "Situations", "PLACEMENT_KINDS", "DEFAULT_EXAMPLES", "grid_shape"]
-
 #: the kinds of placement a field file may declare for the ball and the hole
 PLACEMENT_KINDS = ("fixed", "slider", "region")
 #: the teacher's number of situations by the dimension of the situation space (the paper's

@@ -14,8 +14,6 @@ from ..core.errors import ModelFileError
 from ..core.model_files import read_guarded, write_guarded
 from .hitting_data import HittingDataset
 
-__all__ = ["write_strategies", "read_strategies", "STRATEGIES_FORMAT", "STRATEGIES_VERSION"]
-
 STRATEGIES_FORMAT = "seds_casadi.StrategySet"
 STRATEGIES_VERSION = 2  # 1: without a checksum (refused)
 

@@ -14,8 +14,6 @@ import json
 import casadi as ca
 import numpy as np
 
-__all__ = ["Surface", "SHAPES"]
-
 #: the surface shapes a field file may use
 SHAPES = ("plane", "hills", "arctan", "rough", "heightmap")
 #: extremes of the surfaces seen (shape, parameters, bounds) -> dict, see Surface.extremes
