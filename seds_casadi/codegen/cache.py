@@ -26,8 +26,6 @@ import threading
 
 import casadi as ca
 
-__all__ = ["compiler_available", "cache_folder", "shared_library", "CompileError"]
-
 _LOG = logging.getLogger(__name__)
 _LOCK = threading.Lock()
 #: compile timeout in seconds (a build that takes longer is killed and the caller falls back)

@@ -21,8 +21,6 @@ import numpy as np
 
 from .cache import CompileError, compiler_available, shared_library
 
-__all__ = ["compile_functions", "FastEvaluator", "batch_evaluate", "CachedFunctionMixin"]
-
 _LOG = logging.getLogger(__name__)
 _LOCK = threading.Lock()
 _LOADED: dict[str, tuple[ca.Function, ...]] = {}

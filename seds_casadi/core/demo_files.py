@@ -21,8 +21,6 @@ import numpy as np
 from ._io import atomic_npz, npz_value_count
 from .demonstrations import Demonstrations
 
-__all__ = ["load_demonstrations", "save_demonstrations"]
-
 
 def load_demonstrations(path: str | os.PathLike, **kwargs) -> Demonstrations:
     """Read demonstrations from a ``.npz`` or ``.csv`` file (formats in the module docstring).

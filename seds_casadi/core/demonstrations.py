@@ -19,8 +19,6 @@ from collections.abc import Sequence
 import numpy as np
 from scipy.ndimage import uniform_filter1d
 
-__all__ = ["Demonstrations"]
-
 #: largest magnitude of a position or velocity accepted (squares must stay finite in the solve)
 MAX_MAGNITUDE = 1e100
 

@@ -7,14 +7,6 @@ classes so callers can catch them precisely.
 
 from __future__ import annotations
 
-__all__ = [
-    "SEDSError",
-    "SolverError",
-    "StabilityError",
-    "ModelFileError",
-    "ConvergenceWarning",
-]
-
 
 class SEDSError(Exception):
     """Base class of the errors raised by seds_casadi."""

@@ -31,8 +31,6 @@ from .stable_ds import StableDS
 from .strength import StrengthFactor
 from .user_constraints import UserConstraints
 
-__all__ = ["SEDS"]
-
 _LOG = logging.getLogger(__name__)
 _OK_STATUS = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 #: seconds between two progress lines of a running fit (logging, INFO)

@@ -39,8 +39,6 @@ from .gmm import responsibilities_sx
 from .model_files import read_guarded, write_guarded
 from .strength import StrengthFactor, as_points
 
-__all__ = ["StableDS", "certify"]
-
 FORMAT = "seds_casadi.StableDS"
 VERSION = 1
 VERSION_LYAPUNOV = 2

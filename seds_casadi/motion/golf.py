@@ -4,8 +4,6 @@
 A regulation golf ball: 45.9 g, radius 21.35 mm (see REFERENCE "Ball on a putting surface").
 """
 
-__all__ = ["BALL_MASS", "BALL_RADIUS", "G"]
-
 #: gravitational acceleration [m/s^2]
 G = 9.81
 #: golf ball mass [kg]

@@ -23,8 +23,6 @@ from ..core._io import data_folder
 from ..core.demo_files import load_demonstrations
 from ..core.demonstrations import Demonstrations
 
-__all__ = ["generate_putting_demos", "load_hitting_demos", "HITTING_DEMOS_FILE"]
-
 
 def generate_putting_demos(n_demos: int = 7, rate: float = 20.0, hitting_speed: float = 1.0,
                            random_state: int | None = 0) -> Demonstrations:

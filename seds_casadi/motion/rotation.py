@@ -5,8 +5,6 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-__all__ = ["rotation_z", "rotation_z_sx"]
-
 
 def rotation_z(alpha: float) -> np.ndarray:
     """R_alpha: rotation by alpha [rad] about +z, array of shape (3, 3)."""

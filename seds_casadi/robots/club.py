@@ -6,8 +6,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Club", "DEFAULT_CLUBS"]
-
 
 @dataclass(frozen=True)
 class Club:

@@ -7,8 +7,6 @@ import numpy as np
 
 from .models import Robot
 
-__all__ = ["effective_mass", "gravity_ratio"]
-
 
 def effective_mass(robot: Robot, q, direction) -> float:
     """The arm's effective mass at the club face along ``direction`` (field frame):

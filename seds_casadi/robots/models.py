@@ -22,9 +22,6 @@ import numpy as np
 from .club import DEFAULT_CLUBS, Club
 from .urdf import ROBOTS_FOLDER
 
-__all__ = ["Robot", "load_robot", "robot_names"]
-
-
 # ----------------------------------------------------------------------------- registry
 _ERD_ARMS = {
     # name: (urdf path under example-robot-data's robots/, flange frame, home configuration)

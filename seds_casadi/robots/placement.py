@@ -9,8 +9,6 @@ from ..codegen import FastEvaluator
 from .models import Robot, load_robot
 from .orientation import face_orientation, orientation_error_function
 
-__all__ = ["place_head", "place_robot", "default_base"]
-
 
 def _levenberg_marquardt(robot: Robot, q, err, W, iterations: int, tol: float,
                          angle_tol: float = 1e-4):

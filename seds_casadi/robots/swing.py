@@ -23,8 +23,6 @@ from .limits import limit_report
 from .models import Robot
 from .placement import place_head
 
-__all__ = ["SwingResult", "simulate_swing"]
-
 
 @dataclass
 class SwingResult:
