@@ -404,3 +404,28 @@ def test_the_teacher_keeps_to_direct_shots_unless_banks_are_allowed(datasets):
     rb = simulate_shots(long, banked.ball, STROKE.launch_velocity(banked.alpha, banked.kappa),
                         hole=banked.hole, engine="numpy")
     assert rb.sunk.mean() >= 0.9 and (rb.wall_contacts > 0).any()
+
+
+def test_fixed_speed_on_a_robots_launch_takes_the_gain_that_launches_at_the_needed_speed():
+    from seds_casadi.minigolf.stroke import LaunchTable
+
+    field = load_field("flat")
+    ideal = Teacher(field, STROKE, "fixed_speed")
+    k_ideal = ideal.fixed_kappa
+    need = np.linalg.norm(STROKE.launch_velocity(0.0, k_ideal)[0])
+    # an arm whose launch saturates: the ideal factor up to kappa 2, slower above
+    factor0 = need / (k_ideal * STROKE.speed)
+    assert k_ideal < 2.0
+    kappas = np.array([0.5, 2.0, 3.0])
+    f = np.column_stack([[factor0, factor0, factor0 * 2.0 / 3.0]] * 2)
+    arm = STROKE.with_launch(LaunchTable(np.array([-1.0, 1.0]), kappas, f, np.zeros((3, 2)),
+                                         "test arm"))
+    t = Teacher(field, arm, "fixed_speed", kappa_range=(0.5, 3.0))
+    got = np.linalg.norm(arm.launch_velocity(0.0, t.fixed_kappa)[0])
+    assert got == pytest.approx(need, rel=0.01)   # the gain that launches at the needed speed
+    assert t.fixed_kappa == pytest.approx(k_ideal, rel=0.01)
+    # an arm that cannot launch that fast is refused up front, saying how fast it can
+    slow = STROKE.with_launch(LaunchTable(np.array([-1.0, 1.0]), kappas, 0.5 * f,
+                                          np.zeros((3, 2)), "slow arm"))
+    with pytest.raises(ValueError, match=r"the slow arm launches the ball at most at .* m/s"):
+        Teacher(field, slow, "fixed_speed", kappa_range=(0.5, 3.0))

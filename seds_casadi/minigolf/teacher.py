@@ -226,8 +226,20 @@ class Teacher:
         # (5/7 v0)^2 / (2 a_roll): solve d_s + d_r = dist for v0
         c = 24 / 98 / (MU_SLIDE * G) + (5 / 7) ** 2 / (2 * max(a_roll, 1e-9))
         v0 = np.sqrt(dist / c)
-        club = np.linalg.norm(self.stroke.launch_velocity(0.0, 1.0)[0])
-        return float(v0 / club)
+        if self.stroke.launch_table is None:   # the ideal club: the launch is linear in kappa
+            club = np.linalg.norm(self.stroke.launch_velocity(0.0, 1.0)[0])
+            return float(v0 / club)
+        # a robot's measured launch: the slowest gain in kappa_range that launches at v0
+        lo, hi = self.kappa_range
+        ks = np.linspace(lo, hi, 801)
+        speed = np.linalg.norm(self.stroke.launch_velocity(np.zeros_like(ks), ks), axis=1)
+        if speed.max() < v0:
+            raise ValueError(
+                f"the {self.stroke.launch_table.robot or 'robot'} launches the ball at most at "
+                f"{speed.max():.2f} m/s over kappa {lo:g}..{hi:g}, and a straight putt on "
+                f"{f.name} needs {v0:.2f} m/s (to roll {dist:.2f} m): give the field's teacher "
+                f"a fixed 'kappa', a shorter field or an arm that swings faster")
+        return float(ks[int(np.argmax(speed >= v0))])
 
     @property
     def fixed_kappa(self) -> float:
