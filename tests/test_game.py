@@ -132,13 +132,17 @@ def test_a_miss_says_why(motion):
     scene = _scene(motion, "wam", "flat")
     short = play_shot(scene, Shot([0.2, 0.0], [2.4, 0.0], 0.0, 0.5))
     assert short.hit and not short.sunk and short.reason.startswith("stopped")
-    assert "short by" in short.reason
+    assert "short by" in short.reason and short.miss == "short"
     long = play_shot(scene, Shot([0.2, 0.0], [1.0, 0.3], 0.0, 1.2))   # aimed beside the hole
     assert not long.sunk and "long by" in long.reason and "m right of the line" in long.reason
     over = play_shot(scene, Shot([0.2, 0.0], [0.45, 0.0], 0.0, 2.0))   # straight, too fast
     assert not over.sunk and over.reason == "crossed the hole too fast to drop"
+    assert (long.miss, over.miss) == ("long", "too fast")   # 1.13 m long, 0.71 m beside
+    wide = play_shot(scene, Shot([0.2, 0.0], [1.4, 0.0], 0.6, 0.9))   # 34 deg off the line
+    assert not wide.sunk and wide.miss == "wide", wide.reason
     far = play_shot(_scene(motion, "z1", "flat"), Shot([0.2, 0.0], [2.4, 0.0], 0.0, 1.0))
     assert not far.hit and far.reason.startswith("the swing could not start")
+    assert far.miss == "no swing"
 
 
 def test_a_scene_travels_as_a_spec_and_loads_once_per_process(motion):

@@ -95,18 +95,9 @@ ROOT = PKG.parent
 #: code blocks
 USERS = ("tests", "examples", "benchmarks")
 
-#: imports that the game-layer change removes (the old paths still used by ``app/play.py`` and
-#: ``app/replay.py`` while it is under way), as (importing module, imported module, name):
-#: removed by the game-layer change, together with the old names they keep alive
-#: (``core.demonstrations``'s late import of the file readers, ``app.plotting._plt``,
-#: ``core._io._umask``).
-GAME_LAYER_LEFTOVERS = {
-    ("seds_casadi.app.play", "seds_casadi.core.demonstrations", "load_demonstrations"),
-    ("seds_casadi.core.demonstrations", "seds_casadi.core.demo_files", "load_demonstrations"),
-    ("seds_casadi.app.replay", "seds_casadi.minigolf.ball", "BALL_RADIUS"),
-    ("seds_casadi.app.replay", "seds_casadi.core._io", "_umask"),
-    ("seds_casadi.app.replay", "seds_casadi.app.plotting", "_plt"),
-}
+#: imports exempt from the checks, as (importing module, imported module, name): none since the
+#: game layer landed; add one only with the reason beside it
+GAME_LAYER_LEFTOVERS: set = set()
 
 
 class _Module:
@@ -338,17 +329,6 @@ def test_no_private_name_is_imported_from_another_module():
 
 def test_the_modules_import_each_other_without_cycles():
     assert import_cycles(PKG, allowed=GAME_LAYER_LEFTOVERS) == []
-
-
-def test_the_game_layer_leftovers_are_still_there():
-    """When the game-layer change lands, this fails: delete GAME_LAYER_LEFTOVERS, the late import
-    at the end of core/demonstrations.py and the aliases plotting._plt and _io._umask."""
-    found = set()
-    mods = _read_package(PKG)
-    for mod in mods.values():
-        for target, name, _, _ in _imports(mod.tree, mod.name, mod.package(), mods):
-            found.add((mod.name, target, name))
-    assert GAME_LAYER_LEFTOVERS <= found, sorted(GAME_LAYER_LEFTOVERS - found)
 
 
 # the checkers on a small package of their own: each problem is found, and a clean package passes

@@ -42,7 +42,8 @@ def test_play_quick_writes_shots_summary_figures_and_models(quick_run):
     assert SHOT_COLUMNS == ("method", "shot", "ball_x_m", "ball_y_m", "hole_x_m", "hole_y_m",
                             "alpha_deg", "kappa", "hit", "sunk", "direction_error_deg",
                             "speed_error", "launch_direction_error_deg", "within_limits",
-                            "final_x_m", "final_y_m", "sunk_exudyn", "strategy", "miss_reason")
+                            "final_x_m", "final_y_m", "sunk_exudyn", "strategy", "miss",
+                            "miss_reason")
     assert {row["method"] for row in rows} == {"gpr", "gmr"} and len(rows) == 6
     for row in rows:
         assert row["hit"] in ("True", "False") and row["sunk"] in ("True", "False")

@@ -38,7 +38,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from ..core._io import atomic_csv, atomic_text
-from ..core.demonstrations import load_demonstrations
+from ..core.demo_files import load_demonstrations
 from ..game.launch import calibrate_launch
 from ..game.reach import check_reach, fastest_gain
 from ..game.scene import Scene
@@ -335,6 +335,11 @@ def _summary(cfg: PlayConfig, fld, rows: list[dict], n_situations: int, times: d
             rk = [r for r in mine if r["strategy"] == k]
             lines.append(f"    strategy {k}: played {len(rk)} times, "
                          f"{np.mean([r['sunk'] for r in rk]):.0%} sunk")
+    for m in cfg.learners:
+        missed = [r["miss"] for r in rows if r["method"] == m and not r["sunk"]]
+        if missed:
+            kinds = ", ".join(f"{k} {missed.count(k)}" for k in sorted(set(missed)))
+            lines.append(f"  {m} missed {len(missed)}: {kinds} (shots.csv, miss_reason)")
     hit = [r for r in rows if r["hit"]]
     if hit:
         lines.append("  at the hit: club direction error max "

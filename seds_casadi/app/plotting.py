@@ -33,7 +33,6 @@ def pyplot():
 
 # the old private name, still imported by app/replay.py and app/validate.py: removed by the
 # game-layer change (they import pyplot)
-_plt = pyplot
 
 
 def save_figure(fig, path: str | os.PathLike, dpi: int = 110) -> None:

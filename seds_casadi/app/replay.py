@@ -23,10 +23,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core._io import _umask, atomic_text, data_folder
+from ..core._io import atomic_text, data_folder, umask
 from ..game.scene import Scene
 from ..game.shot import Shot, play_shot
-from ..minigolf.ball import BALL_RADIUS
+from ..motion.golf import BALL_RADIUS
 from .shot_table import shot_row
 
 __all__ = ["Replay", "replay_shot", "write_replay", "write_replay_html", "write_replay_gif",
@@ -198,9 +198,9 @@ def write_replay_gif(replay: Replay, field, path: str | os.PathLike, max_frames:
     faster than real time; the title gives the simulated time of each frame."""
     from matplotlib.animation import PillowWriter
 
-    from .plotting import _plt
+    from .plotting import pyplot
 
-    plt = _plt()
+    plt = pyplot()
     c = {k: np.array(v) / 255 for k, v in REPLAY_COLOURS.items()}
     g = _field_grid(field, 24)
     X, Y = np.meshgrid(g["x"], g["y"])
@@ -245,7 +245,7 @@ def write_replay_gif(replay: Replay, field, path: str | os.PathLike, max_frames:
                              f"{replay.row['alpha_deg']:.2f} deg, kappa = "
                              f"{replay.row['kappa']:.3f}", fontsize=9)
                 writer.grab_frame()
-        os.chmod(tmp, 0o644 & ~_umask())
+        os.chmod(tmp, 0o644 & ~umask())
         os.replace(tmp, path)
     finally:
         plt.close(fig)

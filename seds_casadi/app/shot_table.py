@@ -13,11 +13,12 @@ __all__ = ["SHOT_COLUMNS", "shot_row"]
 #: (kappa, the gain; speed_error, relative to the commanded speed). direction_error_deg is the
 #: club velocity's error at the hit, launch_direction_error_deg the club face's (the ball
 #: leaves along the face's normal); within_limits: no joint over a speed, torque or position
-#: limit during the swing; miss_reason: why a shot missed (:attr:`ShotResult.reason`)
+#: limit during the swing; miss: the kind of miss (:data:`~seds_casadi.game.shot.MISSES`),
+#: miss_reason: why, in words (:attr:`~seds_casadi.game.shot.ShotResult.reason`)
 SHOT_COLUMNS = ("method", "shot", "ball_x_m", "ball_y_m", "hole_x_m", "hole_y_m", "alpha_deg",
                 "kappa", "hit", "sunk", "direction_error_deg", "speed_error",
                 "launch_direction_error_deg", "within_limits", "final_x_m", "final_y_m",
-                "sunk_exudyn", "strategy", "miss_reason")
+                "sunk_exudyn", "strategy", "miss", "miss_reason")
 
 
 def shot_row(res: ShotResult) -> dict:
@@ -33,7 +34,7 @@ def shot_row(res: ShotResult) -> dict:
            "launch_direction_error_deg": res.launch_direction_error_deg,
            "within_limits": "" if res.within_limits is None else res.within_limits,
            "final_x_m": float(res.final_position[0]), "final_y_m": float(res.final_position[1]),
-           "sunk_exudyn": "", "miss_reason": res.reason}
+           "sunk_exudyn": "", "miss": res.miss, "miss_reason": res.reason}
     if res.path is not None:
         row["path"] = res.path
     return row

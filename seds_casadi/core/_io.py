@@ -17,7 +17,6 @@ def umask() -> int:
 
 # the old private name, still imported by app/replay.py: removed by the game-layer change
 # (it imports umask)
-_umask = umask
 
 
 def _public(fd: int) -> None:

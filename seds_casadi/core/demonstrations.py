@@ -382,8 +382,3 @@ class Demonstrations:
     def __repr__(self) -> str:
         lens = [len(p) for p in self.positions]
         return f"Demonstrations(n_demos={self.n_demos}, n_dims={self.n_dims}, samples={lens})"
-
-
-# the old import path of the file readers (they live in demo_files), still used by app/play.py:
-# removed by the game-layer change, and with it this import cycle
-from .demo_files import load_demonstrations  # noqa: E402, F401

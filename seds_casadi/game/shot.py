@@ -27,6 +27,11 @@ from .scene import Scene, SceneSpec
 
 #: the engines :func:`play_shot` plays on
 ENGINES = ("ball", "exudyn")
+#: kinds of miss (:attr:`ShotResult.miss`): the swing could not start (out of reach), the club
+#: never met the ball, the ball left the field, it crossed the hole too fast to drop, it
+#: stopped beside the line from the ball to the hole more than short of or beyond the hole
+#: ("wide"), or short of it or beyond it
+MISSES = ("no swing", "no contact", "out", "too fast", "wide", "short", "long")
 
 
 @dataclass(frozen=True)
@@ -83,7 +88,9 @@ class ShotResult:
     final_position : array, shape (2,)
         Where the ball ended (in the hole when sunk; the start without a hit).
     reason : str
-        Why it missed ("" when sunk).
+        Why it missed, in words ("" when sunk).
+    miss : str
+        The kind of miss: one of :data:`MISSES` ("" when sunk).
     direction_error_deg, speed_error : float
         The club velocity's angle [deg] and relative speed error (unsigned) against the
         commanded kappa v* R_alpha psi* at the hit (NaN without a hit).
@@ -110,6 +117,7 @@ class ShotResult:
     sunk: bool
     final_position: np.ndarray
     reason: str = ""
+    miss: str = ""
     direction_error_deg: float = np.nan
     speed_error: float = np.nan
     launch_direction_error_deg: float = np.nan
@@ -147,24 +155,25 @@ def swing_launch(scene: Scene, ball_xy, alpha: float, kappa: float,
     return swing, launch[0]
 
 
-def miss_reason(scene: Scene, shot: Shot, final, out: bool, path=None) -> str:
-    """Why a ball that was hit did not drop: out of the field, over the hole too fast, or
-    where it stopped relative to the hole (short or long along the line from the ball to the
-    hole, and to which side)."""
+def miss_reason(scene: Scene, shot: Shot, final, out: bool, path=None) -> tuple[str, str]:
+    """Why a ball that was hit did not drop, as (kind of :data:`MISSES`, words): out of the
+    field, over the hole too fast, or where it stopped relative to the hole (short or long
+    along the line from the ball to the hole, and to which side)."""
     if out:
-        return "left the field"
+        return "out", "left the field"
     hole, r = shot.hole, scene.field.hole_radius
     if path is not None and len(path) and np.min(np.linalg.norm(path - hole, axis=1)) < r:
-        return "crossed the hole too fast to drop"
+        return "too fast", "crossed the hole too fast to drop"
     u = hole - shot.ball
     dist = float(np.linalg.norm(u))
     u = u / max(dist, 1e-12)
     d = np.asarray(final, float) - shot.ball
     along = float(d @ u) - dist
     side = float(u[0] * d[1] - u[1] * d[0])
-    return (f"stopped {np.linalg.norm(np.asarray(final) - hole):.2f} m from the hole: "
-            f"{'long' if along > 0 else 'short'} by {abs(along):.2f} m, "
-            f"{abs(side):.2f} m {'left' if side > 0 else 'right'} of the line to it")
+    kind = ("wide" if abs(side) > max(abs(along), r) else "long" if along > 0 else "short")
+    return kind, (f"stopped {np.linalg.norm(np.asarray(final) - hole):.2f} m from the hole: "
+                  f"{kind} by {abs(along):.2f} m, "
+                  f"{abs(side):.2f} m {'left' if side > 0 else 'right'} of the line to it")
 
 
 def play_shot(scene: Scene | SceneSpec, shot: Shot, engine: str = "ball",
@@ -198,17 +207,18 @@ def play_shot(scene: Scene | SceneSpec, shot: Shot, engine: str = "ball",
         swing, launch = swing_launch(scene, shot.ball, shot.alpha, shot.kappa)
     except ValueError as exc:   # out of reach, no start configuration: a miss, with the reason
         return ShotResult(shot, engine, False, False, start,
-                          reason=f"the swing could not start: {exc}")
+                          reason=f"the swing could not start: {exc}", miss="no swing")
     kept = swing if keep_swing else None
     if launch is None:
         return ShotResult(shot, engine, False, False, start, within_limits=swing.within_limits,
-                          reason="the club did not reach the ball", swing=kept)
+                          reason="the club did not reach the ball", miss="no contact",
+                          swing=kept)
     res = simulate_shots(scene.field, shot.ball[None], launch[None], hole=shot.hole,
                          engine="numpy", record_paths=True)
     final, sunk, path = res.final_position[0].copy(), bool(res.sunk[0]), res.paths[0]
+    miss, reason = ("", "") if sunk else miss_reason(scene, shot, final, bool(res.out[0]), path)
     return ShotResult(
-        shot, engine, True, sunk, final,
-        reason="" if sunk else miss_reason(scene, shot, final, bool(res.out[0]), path),
+        shot, engine, True, sunk, final, reason=reason, miss=miss,
         direction_error_deg=swing.direction_error_deg, speed_error=swing.speed_error,
         launch_direction_error_deg=swing.face_error_deg, within_limits=swing.within_limits,
         launch_velocity=launch, effective_mass=swing.effective_mass, path=path, swing=kept)
@@ -223,7 +233,8 @@ def _play_on_exudyn(scene: Scene, shot: Shot) -> ShotResult:
     final = np.asarray(ex.final_position, float).copy()
     if not ex.hit:
         return ShotResult(shot, "exudyn", False, False, final,
-                          reason="the club did not reach the ball", exudyn=ex)
+                          reason="the club did not reach the ball", miss="no contact",
+                          exudyn=ex)
     commanded = shot.kappa * scene.motion.hitting_speed * scene.motion.commanded_direction(
         shot.alpha)
     v = np.asarray(ex.head_velocity, float)
@@ -231,9 +242,9 @@ def _play_on_exudyn(scene: Scene, shot: Shot) -> ShotResult:
     path = ex.path[:, 1:] if len(ex.path) else None
     b = scene.field.bounds
     out = not (b[0] <= final[0] <= b[1] and b[2] <= final[1] <= b[3])
+    miss, reason = ("", "") if ex.sunk else miss_reason(scene, shot, final, out, path)
     return ShotResult(
-        shot, "exudyn", True, bool(ex.sunk), final,
-        reason="" if ex.sunk else miss_reason(scene, shot, final, out, path),
+        shot, "exudyn", True, bool(ex.sunk), final, reason=reason, miss=miss,
         direction_error_deg=float(np.degrees(np.arccos(np.clip(c, -1, 1)))),
         speed_error=float(abs(np.linalg.norm(v) / np.linalg.norm(commanded) - 1)),
         launch_velocity=np.asarray(ex.launch_velocity, float), path=path, exudyn=ex)

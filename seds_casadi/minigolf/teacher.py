@@ -215,7 +215,10 @@ class Teacher:
         if not (len(self.tolerance) == 2 and min(self.tolerance) > 0):
             raise ValueError(f"tolerance must be two positive numbers (sigma of alpha [deg], "
                              f"sigma of kappa), got {self.tolerance}")
-        self._fixed = float(self.kappa) if self.kappa is not None else self._default_kappa()
+        # the fixed gain of "fixed_speed" (the others choose theirs per situation)
+        self._fixed = (float(self.kappa) if self.kappa is not None
+                       else self._default_kappa() if self.strategy == "fixed_speed"
+                       else np.nan)
 
     def _default_kappa(self) -> float:
         f = self.field
