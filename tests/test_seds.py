@@ -266,6 +266,9 @@ def test_approach_constraint_holds_after_fitting(curved_demos_3d):
     model = SEDS(2, random_state=0, approach_direction=u,
                  approach_ratio=3.0).fit(curved_demos_3d).model_
     _assert_certified(model)
+    # feasible: on some CPUs the exact-Hessian solve stalls 4e-5 outside the constraint and
+    # the fit is done again with L-BFGS (fit_info["feasibility_pass"] records the first try)
+    assert model.fit_info["constraint_violation"] < 1e-8
     h = responsibilities(model.target[None], model.priors, model.means[:, :3],
                          model.covariances[:, :3, :3])[0]
     J = np.einsum("k,kij->ij", h, model.A)

@@ -33,6 +33,8 @@ from .user_constraints import UserConstraints
 
 _LOG = logging.getLogger(__name__)
 _OK_STATUS = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
+#: largest NLP constraint violation of a fit taken as feasible (IPOPT's constr_viol_tol here)
+_FEASIBLE = 1e-8
 #: seconds between two progress lines of a running fit (logging, INFO)
 PROGRESS_SECONDS = 2.0
 #: taper radius r of a strength model (:class:`StableDS`), as a fraction of the data's extent:
@@ -481,6 +483,14 @@ class SEDS(RegressorMixin, BaseEstimator):
                                  "in IPOPT's documentation, e.g. 'mu_strategy')") from None
             raise
         t_built = time.perf_counter()
+        g_fun = ca.Function("g", [theta_sym], [nlp["g"]]) if g else None
+
+        def violation(theta) -> float:
+            if g_fun is None:
+                return 0.0
+            gv = np.asarray(g_fun(theta)).ravel()
+            return float(np.max(np.r_[0.0, bounds["lbg"] - gv, gv - bounds["ubg"]]))
+
         res = solver(x0=prob.theta0, lbx=prob.lbx, ubx=prob.ubx, **bounds)
         stats = solver.stats()
         status = str(stats.get("return_status", "unknown"))
@@ -488,7 +498,37 @@ class SEDS(RegressorMixin, BaseEstimator):
         J = float(res["f"])
         if not (np.all(np.isfinite(theta)) and np.isfinite(J)):
             raise SolverError("IPOPT returned non-finite parameters or objective", status)
+        viol = violation(theta)
+        recovered = None
+        if (status not in _OK_STATUS and viol > _FEASIBLE and prob.hessian == Hessian.EXACT
+                and "hessian_approximation" not in str(settings.solver_options)):
+            # the exact Hessian of a constrained fit can stall infeasible (an arrival-constraint
+            # fit ended 4e-5 infeasible after 1,000 iterations, and so did a warm start from
+            # there with L-BFGS); the same fit from the start with L-BFGS: feasible to 1e-11
+            # in 637 iterations. The feasible one of the two is kept.
+            opts2 = dict(opts, **{"ipopt.hessian_approximation": "limited-memory"})
+            solver2 = ca.nlpsol("seds_feasible", "ipopt", nlp, opts2)
+            res2 = solver2(x0=prob.theta0, lbx=prob.lbx, ubx=prob.ubx, **bounds)
+            theta2 = np.asarray(res2["x"]).ravel()
+            J2 = float(res2["f"])
+            _LOG.info("%s: the exact-Hessian solve ended %.3g infeasible; with L-BFGS from the "
+                      "start: %s, %.3g", label, viol, solver2.stats().get("return_status"),
+                      violation(theta2))
+            if np.all(np.isfinite(theta2)) and np.isfinite(J2) and violation(theta2) < viol:
+                stats2 = solver2.stats()
+                recovered = {"status": status, "iterations": int(stats.get("iter_count", -1)),
+                             "constraint_violation": viol}
+                theta, J, viol = theta2, J2, violation(theta2)
+                status = str(stats2.get("return_status", "unknown"))
+                stats = dict(stats2, iter_count=int(stats.get("iter_count", 0))
+                             + int(stats2.get("iter_count", 0)))
         converged = status in _OK_STATUS
+        if viol > 1e-6 and settings.approach_direction is not None:
+            raise SolverError(
+                f"IPOPT ended {viol:.3g} outside the arrival constraint (approach_direction, "
+                f"approach_ratio) after {stats.get('iter_count')} iterations: no model that "
+                "breaks it is returned. Raise max_iter, lower approach_ratio, or use more "
+                "components", status)
         if not converged:
             msg = f"IPOPT stopped without converging after {stats.get('iter_count')} iterations"
             if settings.require_convergence:
@@ -508,15 +548,12 @@ class SEDS(RegressorMixin, BaseEstimator):
                 f"onto a subspace of the {prob.layout.d}-D data); use fewer components, more or "
                 "less redundant data, or hessian='exact'", status) from None
         lyap = prob.lyapunov_matrix(theta) if ps.learned_lyapunov else None
-        viol = 0.0
-        if g:
-            gv = np.asarray(ca.Function("g", [theta_sym], [nlp["g"]])(theta)).ravel()
-            viol = float(np.max(np.r_[0.0, bounds["lbg"] - gv, gv - bounds["ubg"]]))
         info = {
             "status": status, "success": converged,
             "lyapunov": ps.lyapunov.value, "formulation": ps.formulation.value,
             "init": ps.init.value, "gmm": ps.gmm.value,
             "constraint_violation": viol,
+            "feasibility_pass": recovered,
             "iterations": int(stats.get("iter_count", -1)), "objective": J,
             "objective_initial": prob.kernels.value(prob.theta0),
             "objective_name": ps.objective.value, "seconds": time.perf_counter() - t0,
