@@ -16,7 +16,7 @@ import time
 import numpy as np
 import pinocchio as pin
 
-from seds_casadi.motion import HittingMotion, load_hitting_demos
+from seds_casadi.motion import HittingMotionLearner, load_hitting_demos
 from seds_casadi.robots import default_base, load_robot, simulate_swing
 
 
@@ -36,7 +36,7 @@ def main():
     ap.add_argument("--ik", default="dls", choices=["dls", "qp"],
                     help="damped least squares (default) or the QP with the limits")
     args = ap.parse_args()
-    motion = HittingMotion.fit(load_hitting_demos(), n_components=3)
+    motion = HittingMotionLearner(n_components=3).fit(load_hitting_demos()).motion_
     ds = motion.compiled()
     x = np.array([-0.2, 0.01, 0.04])
     t_ds = timeit(lambda: ds(x, 0.05, 1.0))

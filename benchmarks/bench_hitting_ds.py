@@ -23,7 +23,7 @@ import casadi as ca
 import numpy as np
 
 from seds_casadi.codegen import FastEvaluator
-from seds_casadi.motion import HittingMotion, load_hitting_demos
+from seds_casadi.motion import HittingMotionLearner, load_hitting_demos
 
 
 def median_us(fn, repeat: int) -> float:
@@ -39,7 +39,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=20000)
     args = ap.parse_args()
-    motion = HittingMotion.fit(load_hitting_demos())
+    motion = HittingMotionLearner().fit(load_hitting_demos()).motion_
     x = np.array([-0.3, 0.05, 0.1])
     alpha, kappa = 0.2, 1.1
     f = motion.to_casadi()

@@ -34,7 +34,7 @@ from seds_casadi.minigolf.ball import simulate_shots
 from seds_casadi.minigolf.fields import Field, load_field
 from seds_casadi.minigolf.parameters import make_model
 from seds_casadi.minigolf.table1 import format_table1, run_table1, training_indices
-from seds_casadi.motion.hitting import HittingMotion
+from seds_casadi.motion.hitting import HittingMotionLearner
 from seds_casadi.motion.putting_demos import load_hitting_demos
 
 ap = argparse.ArgumentParser()
@@ -57,7 +57,7 @@ for key in ("height", "steepness"):
     if getattr(args, key) is not None:
         spec["surface"][key] = getattr(args, key)
 field = Field.from_dict(spec, source="arctan")
-stroke = Stroke.from_motion(HittingMotion.fit(load_hitting_demos(), n_components=3))
+stroke = Stroke.from_motion(HittingMotionLearner(n_components=3).fit(load_hitting_demos()).motion_)
 
 t0 = time.perf_counter()
 ds = collect_dataset(field, stroke)

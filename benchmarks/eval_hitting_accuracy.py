@@ -20,7 +20,7 @@ import argparse
 
 import numpy as np
 
-from seds_casadi.motion import HittingMotion, load_hitting_demos, rotation_z
+from seds_casadi.motion import HittingMotionLearner, load_hitting_demos, rotation_z
 
 
 def main():
@@ -34,9 +34,9 @@ def main():
                     help="the paper's plain SEDS data (no virtual approach paths)")
     args = ap.parse_args()
     demos = load_hitting_demos()
-    motion = HittingMotion.fit(demos, n_components=args.K, approach_ratio=args.approach_ratio,
-                               approach_paths=not args.no_approach_paths,
-                               random_state=args.fit_seed)
+    motion = HittingMotionLearner(n_components=args.K, approach_ratio=args.approach_ratio,
+                                  approach_paths=not args.no_approach_paths,
+                                  random_state=args.fit_seed).fit(demos).motion_
     lo = np.min([p[0] for p in demos.positions], axis=0)
     hi = np.max([p[0] for p in demos.positions], axis=0)
     rng = np.random.default_rng(args.seed)

@@ -24,7 +24,7 @@ from seds_casadi.minigolf.hitting_data import paper_situations
 from seds_casadi.minigolf.parameters import make_model
 from seds_casadi.minigolf.strategies import explore
 from seds_casadi.minigolf.strategy_choice import StrategyChoice
-from seds_casadi.motion.hitting import HittingMotion
+from seds_casadi.motion.hitting import HittingMotionLearner
 from seds_casadi.motion.putting_demos import load_hitting_demos
 
 ap = argparse.ArgumentParser()
@@ -37,7 +37,7 @@ args = ap.parse_args()
 n_strategies = args.strategies if args.strategies == "auto" else int(args.strategies)
 
 field = load_field(args.field)
-stroke = Stroke.from_motion(HittingMotion.fit(load_hitting_demos(), n_components=3))
+stroke = Stroke.from_motion(HittingMotionLearner(n_components=3).fit(load_hitting_demos()).motion_)
 t0 = time.perf_counter()
 ss = explore(field, stroke, *paper_situations(field), n_strategies=n_strategies)
 print(f"explored {len(ss.ball)} situations in {time.perf_counter() - t0:.1f} s: "

@@ -22,7 +22,7 @@ import time
 import numpy as np
 
 from seds_casadi.minigolf.fields import load_field
-from seds_casadi.motion import BALL_RADIUS, HittingMotion, load_hitting_demos
+from seds_casadi.motion import BALL_RADIUS, HittingMotionLearner, load_hitting_demos
 from seds_casadi.robots import place_robot, simulate_swing
 
 KAPPA = {"wam": (0.5, 1.5), "katana": (0.2, 0.45)}
@@ -55,7 +55,7 @@ def main():
     ctl = {"ik": args.ik}
     if args.no_cartesian_limit:
         ctl["cartesian_speed_limit"] = None
-    motion = HittingMotion.fit(load_hitting_demos(), n_components=3)
+    motion = HittingMotionLearner(n_components=3).fit(load_hitting_demos()).motion_
     field = load_field(args.field)
     for name in args.robots:
         t0 = time.perf_counter()

@@ -15,7 +15,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from seds_casadi.motion import HittingMotion, load_hitting_demos, rotation_z
+from seds_casadi.motion import HittingMotionLearner, load_hitting_demos, rotation_z
 
 ap = argparse.ArgumentParser()
 ap.add_argument("--out", default="examples_out/fig3.png",
@@ -25,7 +25,7 @@ args = ap.parse_args()
 os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
 
 demos = load_hitting_demos()
-motion = HittingMotion.fit(demos)
+motion = HittingMotionLearner().fit(demos).motion_
 starts = [p[0] for p in demos.positions][: 3 if args.quick else 7]
 fig, ax = plt.subplots(figsize=(6, 5.5))
 for alpha, colour in ((0.0, "k"), (np.deg2rad(25), "tab:blue"), (np.deg2rad(-25), "tab:orange")):

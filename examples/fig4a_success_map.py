@@ -27,7 +27,7 @@ from seds_casadi.minigolf.fields import load_field
 from seds_casadi.minigolf.hitting_data import paper_situations
 from seds_casadi.minigolf.strategies import explore
 from seds_casadi.minigolf.teacher import Teacher
-from seds_casadi.motion.hitting import HittingMotion
+from seds_casadi.motion.hitting import HittingMotionLearner
 from seds_casadi.motion.putting_demos import load_hitting_demos
 
 ap = argparse.ArgumentParser()
@@ -40,7 +40,7 @@ args = ap.parse_args()
 os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
 
 field = load_field(args.field)
-stroke = Stroke.from_motion(HittingMotion.fit(load_hitting_demos()))
+stroke = Stroke.from_motion(HittingMotionLearner().fit(load_hitting_demos()).motion_)
 ball = np.array([0.1, -0.3])
 hole = field.situations.hole.design(3)[1 if field.situations.hole.kind != "fixed" else 0]
 n = 60 if args.quick else 200

@@ -13,7 +13,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from seds_casadi.motion import HittingMotion, load_hitting_demos
+from seds_casadi.motion import HittingMotionLearner, load_hitting_demos
 
 ap = argparse.ArgumentParser()
 ap.add_argument("--out", default="examples_out/fig6.png",
@@ -23,7 +23,7 @@ args = ap.parse_args()
 os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
 
 demos = load_hitting_demos()
-motion = HittingMotion.fit(demos)
+motion = HittingMotionLearner().fit(demos).motion_
 n = 3 if args.quick else demos.n_demos
 fig = plt.figure(figsize=(12, 7))
 ax3 = fig.add_subplot(2, 2, 1, projection="3d")

@@ -19,7 +19,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from seds_casadi.app.plotting import plot_arm_frames
-from seds_casadi.motion import HittingMotion, load_hitting_demos
+from seds_casadi.motion import HittingMotionLearner, load_hitting_demos
 from seds_casadi.robots import default_base, load_robot, simulate_swing
 
 ap = argparse.ArgumentParser()
@@ -29,7 +29,7 @@ ap.add_argument("--quick", action="store_true", help="fewer cases for CI")
 args = ap.parse_args()
 os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
 
-motion = HittingMotion.fit(load_hitting_demos(), n_components=3)
+motion = HittingMotionLearner(n_components=3).fit(load_hitting_demos()).motion_
 HOLE_X = 2.4
 offsets = [0.0, -0.18] if args.quick else [0.0, -0.06, -0.12, -0.18]
 holes = [-0.3, 0.3] if args.quick else [-0.3, 0.0, 0.3]

@@ -19,7 +19,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from seds_casadi.motion import HittingMotion, load_hitting_demos
+from seds_casadi.motion import HittingMotionLearner, load_hitting_demos
 from seds_casadi.robots import default_base, load_robot, simulate_swing
 
 ap = argparse.ArgumentParser()
@@ -29,7 +29,7 @@ ap.add_argument("--quick", action="store_true", help="fewer pushes for CI")
 args = ap.parse_args()
 os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
 
-motion = HittingMotion.fit(load_hitting_demos(), n_components=3)
+motion = HittingMotionLearner(n_components=3).fit(load_hitting_demos()).motion_
 robot = load_robot("wam", base=default_base("wam"))
 psi = motion.hitting_direction
 ball0 = np.array([0.0, 0.0, 0.02135])

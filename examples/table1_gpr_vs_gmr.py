@@ -22,7 +22,7 @@ from seds_casadi.app.table1 import fig10, fig11
 from seds_casadi.minigolf import Stroke, collect_dataset
 from seds_casadi.minigolf.fields import load_field
 from seds_casadi.minigolf.table1 import format_table1, run_table1
-from seds_casadi.motion.hitting import HittingMotion
+from seds_casadi.motion.hitting import HittingMotionLearner
 from seds_casadi.motion.putting_demos import load_hitting_demos
 
 ap = argparse.ArgumentParser()
@@ -34,7 +34,7 @@ ap.add_argument("--quick", action="store_true", help="2 repetitions, coarse teac
 args = ap.parse_args()
 os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
 
-stroke = Stroke.from_motion(HittingMotion.fit(load_hitting_demos()))
+stroke = Stroke.from_motion(HittingMotionLearner().fit(load_hitting_demos()).motion_)
 teacher = {"resolution": (81, 26)} if args.quick else {}
 fields = ["double_hill", "arctan"] if args.quick else ["rough_flat", "double_hill", "arctan"]
 datasets = {}

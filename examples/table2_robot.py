@@ -26,7 +26,7 @@ from seds_casadi.minigolf import collect_dataset
 from seds_casadi.minigolf.fields import load_field
 from seds_casadi.minigolf.parameters import make_model
 from seds_casadi.minigolf.table1 import PAPER_TABLE1, protocol, training_indices
-from seds_casadi.motion.hitting import HittingMotion
+from seds_casadi.motion.hitting import HittingMotionLearner
 from seds_casadi.motion.putting_demos import load_hitting_demos
 
 # the paper's Table 2 (real WAM): (field, training, model) -> (e_alpha, success)
@@ -52,7 +52,7 @@ os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
 reps, n_tests = (1, 4) if args.quick else (args.repetitions, args.tests)
 fields = ["double_hill"] if args.quick else ["rough_flat", "double_hill"]
 
-motion = HittingMotion.fit(load_hitting_demos(), n_components=3)
+motion = HittingMotionLearner(n_components=3).fit(load_hitting_demos()).motion_
 rows = []
 for fname in fields:
     field = load_field(fname)

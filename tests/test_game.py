@@ -20,7 +20,7 @@ from seds_casadi.minigolf.fields import load_field  # noqa: E402
 from seds_casadi.minigolf.stroke import LaunchTable, Stroke  # noqa: E402
 from seds_casadi.minigolf.teacher import Teacher  # noqa: E402
 from seds_casadi.motion.golf import BALL_MASS  # noqa: E402
-from seds_casadi.motion.hitting import HittingMotion  # noqa: E402
+from seds_casadi.motion.hitting import HittingMotionLearner  # noqa: E402
 from seds_casadi.motion.putting_demos import load_hitting_demos  # noqa: E402
 from seds_casadi.robots.dynamics import effective_mass  # noqa: E402
 
@@ -49,7 +49,7 @@ BEFORE_EXUDYN = [(True, 0.004488601054968111), (False, 0.006141201275169246)]
 
 @pytest.fixture(scope="module")
 def motion(tmp_path_factory):
-    m = HittingMotion.fit(load_hitting_demos(), n_components=3)
+    m = HittingMotionLearner(n_components=3).fit(load_hitting_demos()).motion_
     folder = tmp_path_factory.mktemp("motion") / "motion"
     m.save(str(folder))
     return m, str(folder)

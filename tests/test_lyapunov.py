@@ -323,9 +323,10 @@ def test_gain_limit_bounds_the_stiffness_of_every_component(lyapunov):
 @pytest.mark.slow
 def test_hitting_motion_on_a_learned_lyapunov_model(tmp_path):
     """Eq. 8, 12 and 14 work unchanged on a model certified by a learned P, and it saves."""
-    from seds_casadi.motion import HittingMotion, load_hitting_demos
+    from seds_casadi.motion import HittingMotion, HittingMotionLearner, load_hitting_demos
 
-    motion = HittingMotion.fit(load_hitting_demos(), n_components=3, lyapunov="learned")
+    motion = HittingMotionLearner(n_components=3, seds_params={"lyapunov": "learned"}).fit(
+        load_hitting_demos()).motion_
     P = motion.target_field.ds.lyapunov_matrix
     assert not np.allclose(P, np.eye(3))
     swing = motion.rollout(np.array([-0.3, 0.1, 0.05]), alpha=0.2, kappa=1.2)

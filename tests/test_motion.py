@@ -31,7 +31,7 @@ def demos():
 
 @pytest.fixture(scope="module")
 def motion(demos):
-    return HittingMotion.fit(demos, n_components=3, random_state=0)
+    return HittingMotionLearner(n_components=3, random_state=0).fit(demos).motion_
 
 
 def test_generated_demos_reach_the_ball_moving_along_x(demos):
@@ -135,14 +135,14 @@ def test_bad_inputs(motion, demos):
                           velocities=[0.8 * (1 - s) * np.array([1.0, 0.2, 0.1])],
                           target=np.zeros(3))
     with pytest.raises(ValueError, match="no hitting motion"):
-        HittingMotion.fit(stop)
+        HittingMotionLearner().fit(stop)
     with pytest.raises(ValueError, match="3-D"):
-        HittingMotion.fit(Demonstrations([np.stack([np.linspace(-1, 0, 9)] * 2, 1)], dt=0.1,
-                                         target=np.zeros(2)))
+        HittingMotionLearner().fit(Demonstrations([np.stack([np.linspace(-1, 0, 9)] * 2, 1)],
+                                                  dt=0.1, target=np.zeros(2)))
     with pytest.raises(TypeError, match="StableDS"):
         TargetField("not a model")
     with pytest.raises(ValueError, match="positive"):
-        StrengthFactor.fit(np.zeros((3, 3)), np.array([1.0, 0.0, 1.0]))
+        StrengthFactorLearner().fit(np.zeros((3, 3)), np.array([1.0, 0.0, 1.0]))
 
 
 def test_a_spiralling_model_has_no_target_field():
@@ -284,19 +284,20 @@ def test_approach_paths_are_tangent_to_the_arrival_direction():
 def test_a_badly_lined_up_fit_is_refitted_and_reported(demos):
     # with these demonstrations, SEDS from seed 3 arrives 0.23 deg off at worst and from seed 4
     # 0.003 deg (found by search): asking for 0.1 deg makes the fit try again
-    m = HittingMotion.fit(demos, n_components=3, random_state=3, max_direction_error=0.1)
+    m = HittingMotionLearner(n_components=3, random_state=3,
+                             max_direction_error=0.1).fit(demos).motion_
     tries = m.fit_info["tries"]
     assert len(tries) >= 2 and tries[0]["max_direction_error_deg"] > 0.1
     assert tries[m.fit_info["kept"]]["max_direction_error_deg"] <= 0.1
     from seds_casadi.core.errors import ConvergenceWarning
 
     with pytest.warns(ConvergenceWarning, match="arrives up to"):
-        HittingMotion.fit(demos, n_components=3, random_state=3, restarts=1,
-                          max_direction_error=0.1)
+        HittingMotionLearner(n_components=3, random_state=3, restarts=1,
+                             max_direction_error=0.1).fit(demos)
     with pytest.raises(ValueError, match="restarts"):
-        HittingMotion.fit(demos, restarts=0)
+        HittingMotionLearner(restarts=0).fit(demos)
     with pytest.raises(ValueError, match="max_direction_error"):
-        HittingMotion.fit(demos, max_direction_error=-1.0)
+        HittingMotionLearner(max_direction_error=-1.0).fit(demos)
 
 
 # ---------------------------------------------------------------- one source of truth (issue 12)
@@ -444,7 +445,10 @@ def test_strength_factor_learner_follows_scikit_learn(demos):
     twin = clone(est).set_params(n_components=3)
     assert not hasattr(twin, "factor_") and twin.n_components == 3
     est.fit(X, S)
-    np.testing.assert_allclose(est.predict(X), StrengthFactor.fit(X, S, 2, 0)(X), rtol=1e-12)
+    np.testing.assert_allclose(est.predict(X), StrengthFactorLearner(2, 0).fit(X, S).factor_(X),
+                               rtol=1e-12)
+    # one way to fit (issue 27): the fitted value has no fit of its own
+    assert not hasattr(StrengthFactor, "fit")
     assert twin.fit(X, S).factor_.priors.shape == (3,)
     assert est.factor_.priors.shape == (2,) and est.n_features_in_ == 3
     assert est.score(X, S) > 0.5  # R^2 of the speeds
@@ -459,8 +463,9 @@ def test_hitting_motion_learner_follows_scikit_learn(motion, demos):
     params = est.get_params()
     assert params["n_components"] == 3 and params["approach_paths"] is True
     assert params["seds_params"] is None and params["restarts"] == 3
-    # clone gives an unfitted copy with the same parameters; fitting it gives HittingMotion.fit's
-    # motion (the shortcut builds this learner)
+    # clone gives an unfitted copy with the same parameters; fitting it gives the same motion as
+    # the fixture's learner; the fitted motion has no fit of its own (one way to fit, issue 27)
+    assert not hasattr(HittingMotion, "fit")
     twin = clone(est)
     assert not hasattr(twin, "motion_") and twin.get_params() == params
     X = np.random.default_rng(8).normal(scale=0.2, size=(20, 3))

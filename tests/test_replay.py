@@ -25,12 +25,12 @@ from seds_casadi.game.scene import Scene  # noqa: E402
 from seds_casadi.game.shot import Shot, play_shot  # noqa: E402
 from seds_casadi.minigolf.fields import load_field  # noqa: E402
 from seds_casadi.minigolf.stroke import Stroke  # noqa: E402
-from seds_casadi.motion import HittingMotion, load_hitting_demos  # noqa: E402
+from seds_casadi.motion import HittingMotionLearner, load_hitting_demos  # noqa: E402
 
 
 @pytest.fixture(scope="module")
 def motion_dir(tmp_path_factory):
-    motion = HittingMotion.fit(load_hitting_demos(), n_components=3)
+    motion = HittingMotionLearner(n_components=3).fit(load_hitting_demos()).motion_
     folder = tmp_path_factory.mktemp("motion") / "motion"
     motion.save(str(folder))
     return str(folder), motion

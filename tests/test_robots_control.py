@@ -11,7 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
-from seds_casadi.motion import HittingMotion, load_hitting_demos, rotation_z
+from seds_casadi.motion import HittingMotionLearner, load_hitting_demos, rotation_z
 from seds_casadi.robots import (
     SwingController,
     default_base,
@@ -40,7 +40,7 @@ RNG = np.random.default_rng(7)
 
 @pytest.fixture(scope="module")
 def motion():
-    return HittingMotion.fit(load_hitting_demos(), n_components=3)
+    return HittingMotionLearner(n_components=3).fit(load_hitting_demos()).motion_
 
 
 def _T(R=np.eye(3), p=(0, 0, 0)):

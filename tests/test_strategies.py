@@ -3,6 +3,7 @@ situations, the choice of the strategy most likely to succeed, saving, bad input
 
 import numpy as np
 import pytest
+from sklearn.base import clone
 
 from seds_casadi.minigolf import Stroke
 from seds_casadi.minigolf.ball import simulate_shots
@@ -100,6 +101,11 @@ def test_the_choice_plays_the_strategy_most_likely_to_succeed():
     np.testing.assert_allclose(out[:3, 0], np.rad2deg(0.1 * S[:3, 1]), atol=0.05)  # deg
     gmr = StrategyChoice("gmr", n_components=1).fit(ss)
     assert gmr.predict(S).shape == (6, 2)
+    # a scikit-learn estimator (one way to fit, issue 27): clone is unfitted, same parameters
+    twin = clone(gmr)
+    assert twin.get_params() == {"learner": "gmr", "n_components": 1, "random_state": 0}
+    assert not hasattr(twin, "models_")
+    np.testing.assert_array_equal(twin.fit(ss).predict(S), gmr.predict(S))
 
 
 def test_bad_input_is_a_clear_error(flat_strategies):

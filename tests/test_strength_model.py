@@ -14,7 +14,7 @@ from seds_casadi import SEDS, StableDS
 from seds_casadi.core.datasets import load_lasa, load_lasa_raw
 from seds_casadi.core.errors import ConvergenceWarning, ModelFileError
 from seds_casadi.core.model_files import checksum
-from seds_casadi.core.strength import StrengthFactor
+from seds_casadi.core.strength import StrengthFactor, StrengthFactorLearner
 
 
 @pytest.fixture(scope="module")
@@ -171,8 +171,8 @@ def test_bad_strength_settings_are_refused(wshape):
         StableDS(*args, strength_radius=1.0)
     with pytest.raises(TypeError, match="StrengthFactor"):
         StableDS(*args, strength=lambda x: 1.0, strength_radius=1.0)
-    sf3 = StrengthFactor.fit(np.random.default_rng(0).standard_normal((40, 3)),
-                             np.exp(np.random.default_rng(1).standard_normal(40)))
+    sf3 = StrengthFactorLearner().fit(np.random.default_rng(0).standard_normal((40, 3)),
+                                      np.exp(np.random.default_rng(1).standard_normal(40))).factor_
     with pytest.raises(ValueError, match="3-D positions"):
         StableDS(*args, strength=sf3, strength_radius=1.0)
     unbounded = StrengthFactor(model.strength.priors, model.strength.means,

@@ -57,9 +57,9 @@ def test_katana_efforts_count_the_torque_beyond_gravity():
 
 @pytest.fixture(scope="module")
 def motion():
-    from seds_casadi.motion import HittingMotion, load_hitting_demos
+    from seds_casadi.motion import HittingMotionLearner, load_hitting_demos
 
-    return HittingMotion.fit(load_hitting_demos(), n_components=3)
+    return HittingMotionLearner(n_components=3).fit(load_hitting_demos()).motion_
 
 
 @pytest.mark.parametrize("name, kappa", [("wam", 1.4), ("katana", 0.4)])

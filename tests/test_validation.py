@@ -80,12 +80,12 @@ def test_kinematic_tree_falls_like_pinocchio(name):
 
 
 def test_the_arm_in_exudyn_hits_like_the_pinocchio_swing():
-    from seds_casadi.motion.hitting import HittingMotion
+    from seds_casadi.motion.hitting import HittingMotionLearner
     from seds_casadi.motion.putting_demos import load_hitting_demos
     from seds_casadi.robots import default_base, simulate_swing
     from seds_casadi.robots.models import load_robot
 
-    motion = HittingMotion.fit(load_hitting_demos(), n_components=3)
+    motion = HittingMotionLearner(n_components=3).fit(load_hitting_demos()).motion_
     f = load_field("flat")
     ball = np.array([0.1, 0.0])
     base = np.array(default_base("wam"))

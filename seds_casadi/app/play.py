@@ -52,7 +52,7 @@ from ..minigolf.strategy_choice import StrategyChoice
 from ..minigolf.stroke import Stroke
 from ..minigolf.table1 import N_COMPONENTS, training_indices
 from ..minigolf.teacher import DEFAULTS
-from ..motion.hitting import HittingMotion
+from ..motion.hitting import HittingMotion, HittingMotionLearner
 from ..motion.putting_demos import load_hitting_demos
 from ..robots.models import load_robot, robot_names
 from ._config import names_tuple, whole_number, with_overrides
@@ -220,7 +220,7 @@ def _learn_and_teach(cfg: PlayConfig, fld, times: dict):
     t0 = time.perf_counter()
     _LOG.info("learning the hitting motion (SEDS + GMR) ...")
     d = load_demonstrations(cfg.demos) if cfg.demos else load_hitting_demos()
-    motion = HittingMotion.fit(d, n_components=3)
+    motion = HittingMotionLearner(n_components=3).fit(d).motion_
     times["hitting motion (SEDS + GMR)"] = time.perf_counter() - t0
     _LOG.info("hitting motion: v* = %.3f m/s (%.1f s)", motion.hitting_speed,
               times["hitting motion (SEDS + GMR)"])

@@ -113,12 +113,12 @@ def _stroke(cfg: Table1Config):
     """The hitting motion's default hit, learned from the demonstrations."""
     from ..core.demo_files import load_demonstrations
     from ..minigolf.stroke import Stroke
-    from ..motion.hitting import HittingMotion
+    from ..motion.hitting import HittingMotionLearner
     from ..motion.putting_demos import load_hitting_demos
 
     t0 = time.perf_counter()
     d = load_demonstrations(cfg.demos) if cfg.demos else load_hitting_demos()
-    motion = HittingMotion.fit(d, n_components=3)
+    motion = HittingMotionLearner(n_components=3).fit(d).motion_
     stroke = Stroke.from_motion(motion)
     _LOG.info("hitting motion: v* = %.3f m/s, psi* = %s (%.1f s)", stroke.speed,
               np.array2string(stroke.direction, precision=3), time.perf_counter() - t0)

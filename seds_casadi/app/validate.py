@@ -24,7 +24,7 @@ from ..minigolf._progress import progress_bar
 from ..minigolf.fields import load_field
 from ..minigolf.parameters import make_model
 from ..minigolf.teacher import DEFAULTS, collect_dataset
-from ..motion.hitting import HittingMotion
+from ..motion.hitting import HittingMotionLearner
 from ..motion.putting_demos import load_hitting_demos
 from ._config import whole_number, with_overrides
 from .executors import open_executor
@@ -85,7 +85,7 @@ def _learn(fld, robot: str, progress: bool, quick: bool = False):
     """The scene (the hitting motion and the robot's measured launch), the teacher's data set
     for the field on that launch (checked against the robot's reach) and GPR fitted on it."""
     t0 = time.perf_counter()
-    motion = HittingMotion.fit(load_hitting_demos(), n_components=3)
+    motion = HittingMotionLearner(n_components=3).fit(load_hitting_demos()).motion_
     scene = Scene(robot, fld, motion)
     arange = fld.teacher.get("alpha_range", DEFAULTS["alpha_range"])
     krange = fld.teacher.get("kappa_range", DEFAULTS["kappa_range"])

@@ -28,7 +28,7 @@ from .parametrization import stability_constraints
 from .problem import SEDSProblem, build_problem
 from .settings import PARAMETER_CONSTRAINTS, Hessian, SEDSSettings
 from .stable_ds import StableDS
-from .strength import StrengthFactor
+from .strength import StrengthFactor, StrengthFactorLearner
 from .user_constraints import UserConstraints
 
 _LOG = logging.getLogger(__name__)
@@ -604,8 +604,8 @@ class SEDS(RegressorMixin, BaseEstimator):
         X = Xs[moving] + demos.target
         K = settings.strength_components or settings.problem.n_components
         Ksf = max(1, min(int(K), n // need))
-        sf = StrengthFactor.fit(X, speed[moving], n_components=Ksf,
-                                random_state=settings.problem.random_state)
+        sf = StrengthFactorLearner(n_components=Ksf, random_state=settings.problem.random_state
+                                   ).fit(X, speed[moving]).factor_
         extent = max(float(np.max(np.ptp(Xs, axis=0))), 1e-12)
         radius = STRENGTH_RADIUS * extent
         if demos.time_ordered:  # trajectories in time order have a step

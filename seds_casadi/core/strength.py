@@ -78,8 +78,9 @@ def strength_sx(x, priors, means, covariances, log_range=(-np.inf, np.inf)) -> c
 class StrengthFactor:
     """v(x) > 0 by GMR on (position, log speed) (Eq. 12, in the log domain; footnote 4).
 
-    A fitted value (see :class:`StrengthFactorLearner` to learn one): its parameters are plain
-    arrays, so saving it is saving them.
+    A fitted value with no ``fit`` of its own: learn one with :class:`StrengthFactorLearner`
+    (``StrengthFactorLearner(n_components=2).fit(positions, speeds).factor_``). Its parameters
+    are plain arrays, so saving it is saving them.
 
     Parameters
     ----------
@@ -95,19 +96,6 @@ class StrengthFactor:
         self.covariances = np.asarray(covariances, dtype=float)
         self.n_dims = self.means.shape[1] - 1
         self.log_range = (float(log_range[0]), float(log_range[1]))
-
-    @classmethod
-    def fit(cls, positions: np.ndarray, speeds: np.ndarray, n_components: int = 2,
-            random_state=0) -> StrengthFactor:
-        """Fit the joint GMM by k-means + EM: a shortcut for
-        ``StrengthFactorLearner(n_components, random_state).fit(positions, speeds).factor_``.
-
-        Parameters
-        ----------
-        positions : array, shape (n, d)
-        speeds : array, shape (n,), all > 0
-        """
-        return StrengthFactorLearner(n_components, random_state).fit(positions, speeds).factor_
 
     def sx(self, x) -> ca.SX:
         """v(x) of Eq. 12 as SX (:func:`strength_sx`), for building larger expressions."""

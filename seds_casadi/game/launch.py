@@ -22,6 +22,9 @@ def calibrate_launch(scene: Scene, alpha_range=(-40.0, 40.0), kappa_range=(0.6, 
                      n_alpha: int = 7, n_kappa: int = 7, ball=None) -> LaunchTable:
     """Measure the scene robot's launch over a grid of hitting parameters.
 
+    A measurement, not a learner: a pure function of the scene that returns a value (the
+    :class:`~seds_casadi.minigolf.stroke.LaunchTable`); nothing is fitted.
+
     Parameters
     ----------
     scene : Scene

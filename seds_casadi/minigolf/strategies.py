@@ -362,6 +362,9 @@ def explore(field: Field, stroke: Stroke, balls, holes, n_strategies="auto",
     """Explore the situations, cluster the successful regions into strategies and keep the
     main ones (module docstring).
 
+    A search, not a learner: nothing is fitted; the :class:`StrategySet` it returns is the data
+    that :class:`~seds_casadi.minigolf.strategy_choice.StrategyChoice` is fitted on.
+
     Parameters
     ----------
     field : Field

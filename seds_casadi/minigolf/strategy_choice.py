@@ -15,6 +15,7 @@ strategy was seen at gets the strategy that is predicted best anyway.
 from __future__ import annotations
 
 import numpy as np
+from sklearn.base import BaseEstimator
 
 from .parameters import make_model
 from .strategies import StrategySet
@@ -22,8 +23,13 @@ from .strategies import StrategySet
 __all__ = ["StrategyChoice"]
 
 
-class StrategyChoice:
+class StrategyChoice(BaseEstimator):
     """Hitting parameters from the strategy most likely to succeed (module docstring).
+
+    A scikit-learn estimator (``get_params``/``set_params``, ``clone``): ``__init__`` stores
+    the parameters, :meth:`fit` on a :class:`~seds_casadi.minigolf.strategies.StrategySet`
+    (from :func:`~seds_casadi.minigolf.strategies.explore`) returns it with the fitted
+    attributes below.
 
     Parameters
     ----------

@@ -141,6 +141,11 @@ def blurred(mask: np.ndarray, sigma_cells: tuple[float, float]) -> np.ndarray:
 class Teacher:
     """Finds good (alpha, kappa) for situations on a field's ball model (module docstring).
 
+    Data collection, not learning: a configured search on the ball model with nothing fitted;
+    :meth:`collect` (or :func:`collect_dataset`) returns the good shots as a
+    :class:`~seds_casadi.minigolf.hitting_data.HittingDataset`, which the hitting-parameter
+    estimators (:func:`~seds_casadi.minigolf.parameters.make_model`) are fitted on.
+
     Settings left at None take the field file's ``"teacher"`` entry, else the defaults
     (:data:`DEFAULTS`).
 

@@ -17,7 +17,8 @@ point by point through a low-overhead evaluator. Swings in time are in
 :mod:`seds_casadi.motion.resting`.
 
 **Learning** a motion from demonstrations is :class:`HittingMotionLearner` (a scikit-learn
-estimator; :meth:`HittingMotion.fit` is a shortcut): the target field by SEDS with the direction
+estimator: ``HittingMotionLearner(n_components=3).fit(demos).motion_``; the motion it returns is
+a value with no ``fit`` of its own): the target field by SEDS with the direction
 objective (Eq. 8-11), the strength factor by GMR (Eq. 12), checked from probe starts and refitted
 from the next initialisation when swings arrive off psi*. Choices where the paper leaves them
 open (documented for users):
@@ -95,8 +96,8 @@ def hitting_ds_sx(x, alpha, kappa, target_field: TargetField, strength: Strength
 class HittingMotion(CachedFunctionMixin):
     """The steerable hitting DS of Eq. 14, from a target field and a strength factor.
 
-    A fitted value: build one from its parts, learn one with :meth:`fit` (or
-    :class:`HittingMotionLearner`), or :meth:`load` a saved one.
+    A fitted value: build one from its parts, learn one with :class:`HittingMotionLearner`
+    (``HittingMotionLearner(n_components=3).fit(demos).motion_``), or :meth:`load` a saved one.
 
     Parameters
     ----------
@@ -130,27 +131,6 @@ class HittingMotion(CachedFunctionMixin):
         self.hitting_direction = target_field.hitting_direction.copy()
         self.hitting_speed = float(strength(np.zeros(3)))
         self.fit_info: dict = {}
-
-    @classmethod
-    def fit(cls, demos: Demonstrations, n_components: int = 3, strength_components: int = 2,
-            random_state=0, approach_ratio: float | None = None, approach_paths: bool = True,
-            approach_length: float = 0.1, approach_order: float = 3.0, restarts: int = 3,
-            max_direction_error: float = 1.0, **seds_kwargs) -> HittingMotion:
-        """Learn a hitting motion: a shortcut for
-        ``HittingMotionLearner(n_components, ..., seds_params=seds_kwargs).fit(demos).motion_``.
-
-        The parameters are those of :class:`HittingMotionLearner`
-        (``**seds_kwargs`` is its ``seds_params``: options of :class:`~seds_casadi.SEDS` such as
-        ``omega_upper``). ``motion.fit_info`` records the SEDS fits tried: seed, probe errors,
-        and which model was kept.
-        """
-        return HittingMotionLearner(
-            n_components=n_components, strength_components=strength_components,
-            random_state=random_state, approach_ratio=approach_ratio,
-            approach_paths=approach_paths, approach_length=approach_length,
-            approach_order=approach_order, restarts=restarts,
-            max_direction_error=max_direction_error, seds_params=seds_kwargs or None,
-        ).fit(demos).motion_
 
     # ------------------------------------------------------------ swings
     def probe(self, starts, alpha: float = 0.0, kappa: float = 1.0, dt: float = 0.002,
