@@ -164,12 +164,14 @@ def test_a_round_on_worker_processes_equals_the_round_here(motion):
     scene = _scene(motion, "wam", "arctan")
     shots = [Shot([0.1, y], [1.4, 0.0], a, 1.4, index=i)
              for i, (y, a) in enumerate([(-0.2, 0.1), (0.0, 0.0), (0.2, -0.1)])]
-    here = play_round(scene, shots)
+    here = play_round(scene, shots)                 # one ball-model run for the three
+    alone = play_round(scene, shots, chunk=1)       # a ball-model run for each
     with open_executor(2) as ex:
-        there = play_round(scene, shots, executor=ex)
-    for a, b in zip(here, there):
-        assert (a.shot.index, a.sunk) == (b.shot.index, b.sunk)
+        there = play_round(scene, shots, executor=ex, chunk=2)
+    for a, b, c in zip(here, there, alone):
+        assert (a.shot.index, a.sunk) == (b.shot.index, b.sunk) == (c.shot.index, c.sunk)
         np.testing.assert_allclose(a.final_position, b.final_position, atol=1e-12)
+        np.testing.assert_array_equal(a.path, c.path)
 
 
 def test_bad_shots_and_engines_are_clear_errors(motion):

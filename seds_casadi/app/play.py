@@ -56,7 +56,7 @@ from ..motion.hitting import HittingMotion, HittingMotionLearner
 from ..motion.putting_demos import load_hitting_demos
 from ..robots.models import load_robot, robot_names
 from ._config import names_tuple, whole_number, with_overrides
-from .executors import open_executor
+from .executors import InlineExecutor, open_executor
 from .play_figures import play_figures, strategy_figure
 from .replay import write_replay
 from .shot_table import SHOT_COLUMNS, shot_row
@@ -306,8 +306,12 @@ def _play_round(cfg: PlayConfig, scene: Scene, shots: list[Shot], ex) -> list[di
     """Step 4: the shots on this process, local workers or Dask (each worker loads the scene
     once); rows in the shots' order."""
     _LOG.info("playing %d shots ...", len(shots))
-    results = play_round(scene, shots, executor=ex, progress=lambda it: progress_bar(
-        it, cfg.progress, desc=f"playing {len(shots)} shots", unit="shot"))
+    # in this process the scene in memory plays them; workers load it from its spec
+    here = isinstance(ex, InlineExecutor)
+    results = play_round(scene, shots, executor=None if here else ex,
+                         progress=lambda it: progress_bar(
+                             it, cfg.progress, desc=f"playing {len(shots)} shots",
+                             unit="batch of 4"))
     return [shot_row(r) for r in results]
 
 

@@ -148,4 +148,5 @@ class CachedFunctionMixin:
     def __getstate__(self) -> dict:
         state = dict(self.__dict__)
         state.pop("_f", None)
+        state.pop("_compiled", None)   # a compiled form of it (HittingMotion.compiled)
         return state

@@ -14,7 +14,16 @@ below them; :mod:`seds_casadi.app` builds on it.
 
 from .launch import calibrate_launch
 from .scene import Scene, SceneSpec
-from .shot import ENGINES, MISSES, Shot, ShotResult, play_round, play_shot, swing_launch
+from .shot import (
+    ENGINES,
+    MISSES,
+    Shot,
+    ShotResult,
+    play_round,
+    play_shot,
+    play_shots,
+    swing_launch,
+)
 
-__all__ = ["Scene", "SceneSpec", "Shot", "ShotResult", "play_shot", "play_round",
+__all__ = ["Scene", "SceneSpec", "Shot", "ShotResult", "play_shot", "play_shots", "play_round",
            "swing_launch", "calibrate_launch", "ENGINES", "MISSES"]

@@ -21,12 +21,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..minigolf.ball import impact, simulate_shots
+from ..minigolf.ball import impact, simulate_shots, substeps
 from ..robots.swing import SwingResult, simulate_swing
 from .scene import Scene, SceneSpec
 
 #: the engines :func:`play_shot` plays on
 ENGINES = ("ball", "exudyn")
+#: the ball model's step [s] (:func:`~seds_casadi.minigolf.ball.simulate_shots`' default)
+BALL_STEP = 0.01
 #: kinds of miss (:attr:`ShotResult.miss`): the swing could not start (out of reach), the club
 #: never met the ball, the ball left the field, it crossed the hole too fast to drop, it
 #: stopped beside the line from the ball to the hole more than short of or beyond the hole
@@ -196,32 +198,60 @@ def play_shot(scene: Scene | SceneSpec, shot: Shot, engine: str = "ball",
     ShotResult
         A swing that cannot start (out of reach) is a miss with that reason, not an error.
     """
+    return play_shots(scene, [shot], engine, keep_swing)[0]
+
+
+def play_shots(scene: Scene | SceneSpec, shots: list[Shot], engine: str = "ball",
+               keep_swing: bool = False) -> list[ShotResult]:
+    """Play several shots of one scene: :func:`play_shot` for each, the same results, with
+    the ball model run once for all the balls the swings launched (its vectorised engine
+    costs about what one ball costs; balls are grouped by their integration sub-steps, so
+    that each is integrated exactly as alone)."""
     if engine not in ENGINES:
         raise ValueError(f"unknown engine {engine!r}; choose one of {', '.join(ENGINES)}")
     if isinstance(scene, SceneSpec):
         scene = scene.load()
     if engine == "exudyn":
-        return _play_on_exudyn(scene, shot)
-    start = shot.ball.copy()
-    try:
-        swing, launch = swing_launch(scene, shot.ball, shot.alpha, shot.kappa)
-    except ValueError as exc:   # out of reach, no start configuration: a miss, with the reason
-        return ShotResult(shot, engine, False, False, start,
-                          reason=f"the swing could not start: {exc}", miss="no swing")
-    kept = swing if keep_swing else None
-    if launch is None:
-        return ShotResult(shot, engine, False, False, start, within_limits=swing.within_limits,
-                          reason="the club did not reach the ball", miss="no contact",
-                          swing=kept)
-    res = simulate_shots(scene.field, shot.ball[None], launch[None], hole=shot.hole,
-                         engine="numpy", record_paths=True)
-    final, sunk, path = res.final_position[0].copy(), bool(res.sunk[0]), res.paths[0]
-    miss, reason = ("", "") if sunk else miss_reason(scene, shot, final, bool(res.out[0]), path)
-    return ShotResult(
-        shot, engine, True, sunk, final, reason=reason, miss=miss,
-        direction_error_deg=swing.direction_error_deg, speed_error=swing.speed_error,
-        launch_direction_error_deg=swing.face_error_deg, within_limits=swing.within_limits,
-        launch_velocity=launch, effective_mass=swing.effective_mass, path=path, swing=kept)
+        return [_play_on_exudyn(scene, shot) for shot in shots]
+    results: list[ShotResult | None] = [None] * len(shots)
+    launched = []   # (index, swing, launch)
+    for i, shot in enumerate(shots):
+        start = shot.ball.copy()
+        try:
+            swing, launch = swing_launch(scene, shot.ball, shot.alpha, shot.kappa)
+        except ValueError as exc:   # out of reach, no start configuration: a miss, with why
+            results[i] = ShotResult(shot, engine, False, False, start,
+                                    reason=f"the swing could not start: {exc}", miss="no swing")
+            continue
+        if launch is None:
+            results[i] = ShotResult(shot, engine, False, False, start,
+                                    within_limits=swing.within_limits,
+                                    reason="the club did not reach the ball", miss="no contact",
+                                    swing=swing if keep_swing else None)
+            continue
+        launched.append((i, swing, launch))
+    groups: dict[int, list] = {}
+    for item in launched:
+        groups.setdefault(substeps(scene.field, item[2][None], BALL_STEP), []).append(item)
+    for group in groups.values():
+        idx = [i for i, _, _ in group]
+        res = simulate_shots(scene.field, np.array([shots[i].ball for i in idx]),
+                             np.array([launch for _, _, launch in group]),
+                             dt=BALL_STEP, hole=np.array([shots[i].hole for i in idx]),
+                             engine="numpy", record_paths=True)
+        for k, (i, swing, launch) in enumerate(group):
+            shot = shots[i]
+            final, sunk, path = res.final_position[k].copy(), bool(res.sunk[k]), res.paths[k]
+            miss, reason = (("", "") if sunk
+                            else miss_reason(scene, shot, final, bool(res.out[k]), path))
+            results[i] = ShotResult(
+                shot, engine, True, sunk, final, reason=reason, miss=miss,
+                direction_error_deg=swing.direction_error_deg, speed_error=swing.speed_error,
+                launch_direction_error_deg=swing.face_error_deg,
+                within_limits=swing.within_limits, launch_velocity=launch,
+                effective_mass=swing.effective_mass, path=path,
+                swing=swing if keep_swing else None)
+    return results
 
 
 def _play_on_exudyn(scene: Scene, shot: Shot) -> ShotResult:
@@ -250,23 +280,27 @@ def _play_on_exudyn(scene: Scene, shot: Shot) -> ShotResult:
         launch_velocity=np.asarray(ex.launch_velocity, float), path=path, exudyn=ex)
 
 
-def _play_task(spec: SceneSpec, shot: Shot, engine: str, keep_swing: bool) -> ShotResult:
+def _play_task(spec: SceneSpec, shots: list[Shot], engine: str,
+               keep_swing: bool) -> list[ShotResult]:
     """A picklable task for a worker process: the scene is loaded once per process."""
-    return play_shot(spec, shot, engine, keep_swing)
+    return play_shots(spec, shots, engine, keep_swing)
 
 
 def play_round(scene: Scene, shots: list[Shot], engine: str = "ball", executor=None,
-               keep_swing: bool = False, progress=None) -> list[ShotResult]:
+               keep_swing: bool = False, progress=None, chunk: int = 4) -> list[ShotResult]:
     """Play shots of one scene, in this process or on ``executor`` (anything with
     ``submit(fn, *args)`` returning futures: a process pool or a Dask client; its workers load
-    the scene once each from :meth:`Scene.spec`).
+    the scene once each from :meth:`Scene.spec` and play ``chunk`` shots per task).
 
-    ``progress``: optional callable wrapping an iterable of futures/shots (a progress bar).
-    Results are in the shots' order.
+    ``progress``: optional callable wrapping an iterable (a progress bar) of the tasks.
+    Results are in the shots' order and do not depend on the executor or the chunks.
     """
     wrap = progress or (lambda it: it)
+    if int(chunk) < 1:
+        raise ValueError(f"chunk must be a positive number of shots, got {chunk}")
+    parts = [shots[i:i + int(chunk)] for i in range(0, len(shots), int(chunk))]
     if executor is None:
-        return [play_shot(scene, s, engine, keep_swing) for s in wrap(shots)]
+        return [r for part in wrap(parts) for r in play_shots(scene, part, engine, keep_swing)]
     spec = scene.spec()
-    futures = [executor.submit(_play_task, spec, s, engine, keep_swing) for s in shots]
-    return [f.result() for f in wrap(futures)]
+    futures = [executor.submit(_play_task, spec, part, engine, keep_swing) for part in parts]
+    return [r for f in wrap(futures) for r in f.result()]

@@ -299,7 +299,12 @@ class HittingMotion(CachedFunctionMixin):
         """
         from ..codegen import FastEvaluator, compile_functions
 
-        return FastEvaluator(compile_functions([self.to_casadi()])[0])
+        # the compiled Function is built once per motion (code generation and the library's
+        # hash cost about 8 ms, once per swing before); each caller gets its own buffers
+        f = self.__dict__.get("_compiled")
+        if f is None:
+            f = self.__dict__["_compiled"] = compile_functions([self.to_casadi()])[0]
+        return FastEvaluator(f)
 
     def to_casadi(self, name: str = "hitting_ds") -> ca.Function:
         """Eq. 14 as a CasADi Function (x (3,), alpha, kappa) -> xdot (3,) (:func:`hitting_ds_sx`),
