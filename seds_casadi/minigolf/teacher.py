@@ -349,12 +349,20 @@ class Teacher:
         scan = np.arange(alphas[cols[0]] - 3 * da, alphas[cols[-1]] + 3 * da, da / 10)
         need = np.deg2rad(self.min_width)
 
+        memo: dict[float, tuple[float, float]] = {}
+
         def widest(kappa):
-            runs = true_runs(self.map(ball, hole, scan, [kappa])[0])
-            if not runs:
-                return 0.0, np.nan
-            a, b = max(runs, key=lambda r: r[1] - r[0])
-            return (b - a) * da / 10, 0.5 * (scan[a] + scan[b - 1])
+            """The widest successful angle interval at ``kappa`` on the fine scan (its width
+            and middle); each gain is simulated once (the steps below ask for some twice)."""
+            k = float(kappa)
+            if k not in memo:
+                runs = true_runs(self.map(ball, hole, scan, [k])[0])
+                if not runs:
+                    memo[k] = (0.0, np.nan)
+                else:
+                    a, b = max(runs, key=lambda r: r[1] - r[0])
+                    memo[k] = ((b - a) * da / 10, 0.5 * (scan[a] + scan[b - 1]))
+            return memo[k]
 
         grid_width = np.array([max(b - a for a, b in true_runs(comp[r])) for r in rows]) * da
         i = int(rows[np.argmax(grid_width >= need)] if (grid_width >= need).any()
