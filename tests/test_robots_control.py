@@ -360,3 +360,22 @@ def test_swing_refuses_an_unknown_perturbation(motion):
     with pytest.raises(ValueError, match=r"unknown perturbation key\(s\) \['kappa'\]"):
         simulate_swing(r, motion, np.array([0.0, 0.0, 0.02135]),
                        perturb=[{"t": 0.1, "kappa": 1.2}])
+
+
+def test_controllers_with_the_same_arm_and_settings_share_one_compiled_tick(motion):
+    from seds_casadi.robots.controller import Gains, _compiled_tick, tick_function
+
+    a = SwingController(load_robot("wam", base=(0.0, 0.5, 0.0, -np.pi / 2)), motion)
+    b = SwingController(load_robot("wam", base=(1.0, -0.2, 0.1, 0.3)), motion)  # another place
+    assert _compiled_tick(a) is _compiled_tick(b)
+    other = [SwingController(load_robot("wam"), motion, gains=Gains(kp=90.0)),
+             SwingController(load_robot("panda"), motion),
+             SwingController(load_robot("wam"), motion, period=0.004),
+             SwingController(load_robot("wam"), motion, cartesian_speed_limit=None)]
+    ticks = {id(_compiled_tick(c)) for c in other} | {id(_compiled_tick(a))}
+    assert len(ticks) == 5
+    # the shared tick computes what a tick built for this controller computes
+    fresh = tick_function(b)
+    z = RNG.standard_normal(fresh.size1_in(0))
+    np.testing.assert_allclose(np.asarray(_compiled_tick(b)(z)), np.asarray(fresh(z)),
+                               rtol=1e-9, atol=1e-9)

@@ -175,7 +175,7 @@ class SwingController:
             self._step = FastEvaluator(_qp_tick(self, tick, terms,
                                                 qp_solver(robot.nv, qp_solver_name)))
         else:
-            self._step = FastEvaluator(compile_functions([tick_function(self)])[0])
+            self._step = FastEvaluator(_compiled_tick(self))
         self.reset(robot.q_home)
 
     def reset(self, q: np.ndarray) -> None:
@@ -280,6 +280,35 @@ class SwingController:
         s = float(np.clip(np.min((np.sign(d[over]) * eff[over] - load[over]) / d[over]),
                           0.0, 1.0))
         return bias + s * d
+
+
+#: compiled DLS ticks of this process, by what :func:`tick_function` reads (at most 16)
+_TICKS: dict = {}
+
+
+def _tick_key(ctl: SwingController) -> tuple:
+    """Everything :func:`tick_function` reads with the DLS inverse kinematics: the motion (by
+    identity: a value), the arm's limits and home posture, the speed points' count, the gains
+    and the controller's numbers. The base placement is an input of the tick, not part of it."""
+    r = ctl.robot
+    return (id(ctl.motion), r.nv, r.lower.tobytes(), r.upper.tobytes(),
+            r.velocity_limit.tobytes(), np.asarray(r.q_home, float).tobytes(),
+            len(ctl._points), tuple(vars(ctl.gains).items()), ctl.period, ctl.velocity_margin,
+            ctl.cartesian_speed_limit)
+
+
+def _compiled_tick(ctl: SwingController) -> ca.Function:
+    """The compiled DLS tick of ``ctl``: built and compiled once per process for the same
+    motion, arm and settings (about 18 ms each time before: every swing built its own)."""
+    key = _tick_key(ctl)
+    hit = _TICKS.get(key)
+    if hit is not None and hit[0] is ctl.motion:
+        return hit[1]
+    f = compile_functions([tick_function(ctl)])[0]
+    if len(_TICKS) >= 16:
+        _TICKS.pop(next(iter(_TICKS)))
+    _TICKS[key] = (ctl.motion, f)   # the motion is kept alive: its id stays its own
+    return f
 
 
 def _tick_symbols(ctl: SwingController) -> dict:
