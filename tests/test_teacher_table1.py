@@ -429,3 +429,29 @@ def test_fixed_speed_on_a_robots_launch_takes_the_gain_that_launches_at_the_need
                                           np.zeros((3, 2)), "slow arm"))
     with pytest.raises(ValueError, match=r"the slow arm launches the ball at most at .* m/s"):
         Teacher(field, slow, "fixed_speed", kappa_range=(0.5, 3.0))
+
+
+def test_a_data_set_taught_on_a_robots_launch_saves_and_loads_it(tmp_path):
+    from seds_casadi.minigolf.stroke import LaunchTable
+
+    table = LaunchTable(np.array([-0.5, 0.0, 0.5]), np.array([0.6, 1.5]),
+                        np.array([[1.5, 1.6, 1.55], [1.2, 1.3, 1.25]]),
+                        np.array([[0.01, 0.0, -0.01], [0.02, 0.0, -0.02]]), "wam")
+    stroke = STROKE.with_launch(table)
+    n = 4
+    ds = HittingDataset("flat", "fixed_speed", np.zeros((n, 2)), np.tile([2.0, 0.1], (n, 1)),
+                        np.linspace(-0.1, 0.1, n), np.full(n, 1.2), stroke, 0,
+                        np.zeros(n, int), {})
+    ds.save(tmp_path / "d.npz")
+    back = HittingDataset.load(tmp_path / "d.npz")
+    assert back.stroke.launch_table.to_dict() == table.to_dict()
+    np.testing.assert_array_equal(back.stroke.launch_velocity(ds.alpha, ds.kappa),
+                                  stroke.launch_velocity(ds.alpha, ds.kappa))
+    # a table that does not hold together is refused as the file's error
+    a = {"ball": ds.ball, "hole": ds.hole, "alpha_deg": ds.alpha_deg, "kappa": ds.kappa,
+         "labels": np.asarray(ds.labels)}
+    bad = table.to_dict() | {"speed_factor": [[1.5, -1.0, 1.55], [1.2, 1.3, 1.25]]}
+    meta = {"field": "flat", "strategy": "fixed_speed", "dropped": 0, "situations": {},
+            "stroke": stroke.to_dict() | {"launch_table": bad}}
+    with pytest.raises(ModelFileError, match="my.npz: entry 'meta'"):
+        HittingDataset.from_arrays(a, meta, "my.npz")
