@@ -66,7 +66,7 @@ def test_the_shot_function_plays_as_the_code_before_it(motion, case, expected):
     res = play_shot(_scene(motion, robot, field), Shot(ball, hole, alpha, kappa))
     hit, sunk, dir_err, speed_err, face_err, final = expected
     assert (res.hit, res.sunk) == (hit, sunk)
-    np.testing.assert_allclose([res.direction_error_deg, res.speed_error,
+    np.testing.assert_allclose([res.direction_error_deg, abs(res.speed_error),
                                 res.launch_direction_error_deg], [dir_err, speed_err, face_err],
                                rtol=1e-5, atol=1e-7)
     np.testing.assert_allclose(res.final_position, final, atol=1e-6)
@@ -132,6 +132,10 @@ def test_a_miss_says_why(motion):
     scene = _scene(motion, "wam", "flat")
     short = play_shot(scene, Shot([0.2, 0.0], [2.4, 0.0], 0.0, 0.5))
     assert short.hit and not short.sunk and short.reason.startswith("stopped")
+    sw = play_shot(scene, short.shot, keep_swing=True).swing    # the signed speed error
+    assert short.speed_error == pytest.approx(
+        np.linalg.norm(sw.hit_velocity) / np.linalg.norm(sw.commanded) - 1, abs=1e-12)
+    assert abs(short.speed_error) == pytest.approx(sw.speed_error, abs=1e-15)
     assert "short by" in short.reason and short.miss == "short"
     long = play_shot(scene, Shot([0.2, 0.0], [1.0, 0.3], 0.0, 1.2))   # aimed beside the hole
     assert not long.sunk and "long by" in long.reason and "m right of the line" in long.reason

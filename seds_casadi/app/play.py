@@ -346,8 +346,10 @@ def _summary(cfg: PlayConfig, fld, rows: list[dict], n_situations: int, times: d
             lines.append(f"  {m} missed {len(missed)}: {kinds} (shots.csv, miss_reason)")
     hit = [r for r in rows if r["hit"]]
     if hit:
+        se = [r["speed_error"] for r in hit]
         lines.append("  at the hit: club direction error max "
-                     f"{max(r['direction_error_deg'] for r in hit):.2f} deg, launch direction "
+                     f"{max(r['direction_error_deg'] for r in hit):.2f} deg, speed error "
+                     f"{min(se):+.1%} to {max(se):+.1%}, launch direction "
                      f"(face) error max {max(r['launch_direction_error_deg'] for r in hit):.2f}"
                      f" deg; {sum(r['within_limits'] is True for r in rows)} of {len(rows)} "
                      "swings within the arm's limits")

@@ -40,7 +40,8 @@ def _shots_figure(fld, rows, learners, out, robot) -> None:
         plot_field(fld, ax=ax, paths=[r["path"] for r in rs if "path" in r],
                    sunk=[r["sunk"] for r in rs if "path" in r],
                    ball=np.array([[r["ball_x_m"], r["ball_y_m"]] for r in rs]),
-                   hole=np.array([[r["hole_x_m"], r["hole_y_m"]] for r in rs]), checked=checked)
+                   hole=np.array([[r["hole_x_m"], r["hole_y_m"]] for r in rs]), checked=checked,
+                   no_hit=np.array([[r["ball_x_m"], r["ball_y_m"]] for r in rs if not r["hit"]]))
         ax.set_title(f"{fld.name}, the {robot}, hitting parameters by {m}: "
                      f"{np.mean([r['sunk'] for r in rs]):.0%} of {len(rs)} shots sunk",
                      fontsize=9)

@@ -261,7 +261,7 @@ def plot_joint_gmm(model, outputs: np.ndarray, ax_row=None, names=("alpha [deg]"
 
 
 def plot_field(field, ax=None, paths=None, sunk=None, ball=None, hole=None, n: int = 200,
-               checked=None, legend: bool = True):
+               checked=None, legend: bool = True, no_hit=None):
     """The field's height map with ball paths (green: sunk, red: missed) and a key.
 
     Parameters
@@ -274,6 +274,9 @@ def plot_field(field, ax=None, paths=None, sunk=None, ball=None, hole=None, n: i
         Shots checked again in exudyn: a diamond at the ball, filled when exudyn agreed.
     legend : bool
         A key of the paths, balls, holes and checks drawn.
+    no_hit : array, shape (m, 2), optional
+        Balls the club never struck (the swing could not start or did not reach the ball): a
+        red cross over the ball, so that a shot without a path is still seen.
     """
     from matplotlib.lines import Line2D
 
@@ -307,6 +310,11 @@ def plot_field(field, ax=None, paths=None, sunk=None, ball=None, hole=None, n: i
         B = np.atleast_2d(ball)
         ax.plot(B[:, 0], B[:, 1], "wo", mec="k", ms=4)
         key.append(Line2D([], [], color="w", marker="o", mec="k", ms=4, ls="", label="ball"))
+    if no_hit is not None and len(no_hit):
+        N = np.atleast_2d(no_hit)
+        ax.plot(N[:, 0], N[:, 1], "x", color="r", ms=9, mew=2)
+        key.append(Line2D([], [], color="r", marker="x", ms=7, mew=2, ls="",
+                          label="not hit (shots.csv: miss_reason)"))
     for xy, agreed in checked or []:
         ax.plot(*xy, "D", ms=9, mec="m", mfc="m" if agreed else "none", mew=1.5, alpha=0.8)
     if checked:

@@ -10,7 +10,8 @@ from ..game.shot import ShotResult
 __all__ = ["SHOT_COLUMNS", "shot_row"]
 
 #: columns of ``shots.csv``; a unit ends the name (m, deg), dimensionless ones have none
-#: (kappa, the gain; speed_error, relative to the commanded speed). direction_error_deg is the
+#: (kappa, the gain; speed_error, relative to the commanded speed, signed: negative when the
+#: club is slower). direction_error_deg is the
 #: club velocity's error at the hit, launch_direction_error_deg the club face's (the ball
 #: leaves along the face's normal); within_limits: no joint over a speed, torque or position
 #: limit during the swing; miss: the kind of miss (:data:`~seds_casadi.game.shot.MISSES`),

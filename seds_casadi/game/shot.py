@@ -94,8 +94,9 @@ class ShotResult:
     miss : str
         The kind of miss: one of :data:`MISSES` ("" when sunk).
     direction_error_deg, speed_error : float
-        The club velocity's angle [deg] and relative speed error (unsigned) against the
-        commanded kappa v* R_alpha psi* at the hit (NaN without a hit).
+        The club velocity's angle [deg] and relative speed error, signed (|v| / |commanded| - 1:
+        negative when the club is slower), against the commanded kappa v* R_alpha psi* at the
+        hit (NaN without a hit).
     launch_direction_error_deg : float
         The club face's horizontal angle from the commanded direction at the hit [deg]: where
         the face sends the ball (NaN without a hit or on exudyn).
@@ -246,7 +247,8 @@ def play_shots(scene: Scene | SceneSpec, shots: list[Shot], engine: str = "ball"
                             else miss_reason(scene, shot, final, bool(res.out[k]), path))
             results[i] = ShotResult(
                 shot, engine, True, sunk, final, reason=reason, miss=miss,
-                direction_error_deg=swing.direction_error_deg, speed_error=swing.speed_error,
+                direction_error_deg=swing.direction_error_deg,
+                speed_error=swing.signed_speed_error,
                 launch_direction_error_deg=swing.face_error_deg,
                 within_limits=swing.within_limits, launch_velocity=launch,
                 effective_mass=swing.effective_mass, path=path,
@@ -276,7 +278,7 @@ def _play_on_exudyn(scene: Scene, shot: Shot) -> ShotResult:
     return ShotResult(
         shot, "exudyn", True, bool(ex.sunk), final, reason=reason, miss=miss,
         direction_error_deg=float(np.degrees(np.arccos(np.clip(c, -1, 1)))),
-        speed_error=float(abs(np.linalg.norm(v) / np.linalg.norm(commanded) - 1)),
+        speed_error=float(np.linalg.norm(v) / np.linalg.norm(commanded) - 1),
         launch_velocity=np.asarray(ex.launch_velocity, float), path=path, exudyn=ex)
 
 

@@ -105,9 +105,13 @@ class SwingResult:
 
     @property
     def speed_error(self) -> float:
-        """Relative error of the hitting speed."""
-        return float(abs(np.linalg.norm(self.hit_velocity) / np.linalg.norm(self.commanded)
-                         - 1))
+        """Relative error of the hitting speed (unsigned; :attr:`signed_speed_error`)."""
+        return abs(self.signed_speed_error)
+
+    @property
+    def signed_speed_error(self) -> float:
+        """|measured| / |commanded| - 1 at the hit: negative when the club is slower."""
+        return float(np.linalg.norm(self.hit_velocity) / np.linalg.norm(self.commanded) - 1)
 
 
 def _rk4_period(robot: Robot, q, qd, tau, period: float, substeps: int):
