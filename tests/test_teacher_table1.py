@@ -455,3 +455,19 @@ def test_a_data_set_taught_on_a_robots_launch_saves_and_loads_it(tmp_path):
             "stroke": stroke.to_dict() | {"launch_table": bad}}
     with pytest.raises(ModelFileError, match="my.npz: entry 'meta'"):
         HittingDataset.from_arrays(a, meta, "my.npz")
+
+
+@pytest.mark.parametrize("strategy", ["minimal_speed", "centre"])
+def test_an_arm_too_slow_for_the_nearest_putt_is_refused_before_any_search(strategy):
+    from seds_casadi.minigolf.stroke import LaunchTable
+
+    field = load_field("arctan")
+    grid = (np.array([-1.0, 1.0]), np.array([0.5, 3.0]))
+    slow = STROKE.with_launch(LaunchTable(*grid, np.full((2, 2), 0.2), np.zeros((2, 2)), "arm"))
+    # 0.2 x kappa 2.4 x v* 0.99 m/s: 0.48 m/s
+    with pytest.raises(ValueError, match=r"the arm launches the ball at most at 0\.48 m/s"):
+        Teacher(field, slow, strategy, kappa_range=(0.6, 2.4))
+    # the ideal club's launch as a table passes (the shipped teacher finds its shots with it)
+    k = float(np.linalg.norm(STROKE.launch_velocity(0.0, 1.0)[0]) / STROKE.speed)
+    Teacher(field, STROKE.with_launch(LaunchTable(*grid, np.full((2, 2), k), np.zeros((2, 2)))),
+            strategy, kappa_range=(0.6, 2.4))

@@ -220,20 +220,48 @@ class Teacher:
         if not (len(self.tolerance) == 2 and min(self.tolerance) > 0):
             raise ValueError(f"tolerance must be two positive numbers (sigma of alpha [deg], "
                              f"sigma of kappa), got {self.tolerance}")
+        if self.stroke.launch_table is not None:
+            self._check_launch_speed()
         # the fixed gain of "fixed_speed" (the others choose theirs per situation)
         self._fixed = (float(self.kappa) if self.kappa is not None
                        else self._default_kappa() if self.strategy == "fixed_speed"
                        else np.nan)
 
+    def _level_putt_speed(self, dist: float) -> float:
+        """The launch speed that rolls a ball ``dist`` metres on level ground of this field:
+        v0 skids to 5/7 v0 over d_s = 24/98 v0^2/(mu g) (see ball), then rolls (5/7 v0)^2 /
+        (2 a_roll); d_s + d_r = dist solved for v0."""
+        a_roll = 5 / 7 * self.field.rolling_resistance * G
+        c = 24 / 98 / (MU_SLIDE * G) + (5 / 7) ** 2 / (2 * max(a_roll, 1e-9))
+        return float(np.sqrt(max(dist, 0.0) / c))
+
+    def _check_launch_speed(self) -> None:
+        """A robot's measured launch: refuse, before any search, an arm that cannot launch the
+        ball fast enough for the nearest declared situation, even with the field's whole drop
+        helping it (a lower bound on the speed needed: energy, v^2 >= v_level^2 - 10/7 g h)."""
+        f, table = self.field, self.stroke.launch_table
+        balls, holes = f.situations.design()
+        dist = float(np.min(np.linalg.norm(holes - balls, axis=1))) - f.hole_radius
+        drop = f.surface.extremes(f.bounds)["height_range"]
+        need = float(np.sqrt(max(self._level_putt_speed(dist) ** 2 - 10 / 7 * G * drop, 0.0)))
+        lo, hi = self.kappa_range
+        A, K = np.meshgrid(np.deg2rad(np.linspace(*self.alpha_range, 41)),
+                           np.linspace(lo, hi, 121))
+        fastest = float(np.max(np.linalg.norm(
+            self.stroke.launch_velocity(A.ravel(), K.ravel()), axis=1)))
+        if fastest < need:
+            raise ValueError(
+                f"the {table.robot or 'robot'} launches the ball at most at {fastest:.2f} m/s "
+                f"(kappa {lo:g}..{hi:g}, alpha {self.alpha_range[0]:g}..{self.alpha_range[1]:g}"
+                f" deg), and the nearest declared putt on {f.name} ({dist:.2f} m to the hole's "
+                f"edge) needs at least {need:.2f} m/s: declare situations nearer the hole, give "
+                f"the teacher a wider kappa_range, or use an arm that swings faster")
+
     def _default_kappa(self) -> float:
         f = self.field
         balls, holes = f.situations.design()
         dist = float(np.mean(np.linalg.norm(holes - balls, axis=1))) + FIXED_SPEED_OVERSHOOT
-        a_roll = 5 / 7 * f.rolling_resistance * G
-        # launch v0 skids to 5/7 v0 over d_s = 24/98 v0^2/(mu g) (see ball), then rolls
-        # (5/7 v0)^2 / (2 a_roll): solve d_s + d_r = dist for v0
-        c = 24 / 98 / (MU_SLIDE * G) + (5 / 7) ** 2 / (2 * max(a_roll, 1e-9))
-        v0 = np.sqrt(dist / c)
+        v0 = self._level_putt_speed(dist)
         if self.stroke.launch_table is None:   # the ideal club: the launch is linear in kappa
             club = np.linalg.norm(self.stroke.launch_velocity(0.0, 1.0)[0])
             return float(v0 / club)
