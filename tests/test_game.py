@@ -231,3 +231,19 @@ def test_a_bad_launch_table_is_refused(bad):
     with pytest.raises(ValueError):
         LaunchTable(np.array(bad["alphas"]), np.array(bad["kappas"]), bad["f"],
                     np.zeros_like(bad["f"]))
+
+
+def test_the_katana_plays_its_own_green_as_in_the_papers_section_7_1(tmp_path):
+    # Fig. 7a: the ball moved along y from 0 to -0.18 m, the hole fixed on the x axis; the
+    # Katana's own launch is taught, its swings are checked against its limits and in exudyn
+    from seds_casadi.app.play import play
+
+    res = play(robot="katana", field="katana_flat", shots=10, validate_shots=3,
+               out=str(tmp_path / "out"), progress=False, cache=False)
+    assert res["success"]["gpr"] >= 0.95 and res["success"]["gmr"] >= 0.95
+    rows = res["rows"]
+    assert all(r["hit"] and r["within_limits"] is True for r in rows)
+    assert max(r["direction_error_deg"] for r in rows) < 1.0
+    assert max(abs(r["speed_error"]) for r in rows) < 0.02
+    checked = [r for r in rows if r["sunk_exudyn"] != ""]
+    assert len(checked) == 3 and all(r["sunk_exudyn"] == r["sunk"] for r in checked)
