@@ -247,3 +247,12 @@ def test_the_katana_plays_its_own_green_as_in_the_papers_section_7_1(tmp_path):
     assert max(abs(r["speed_error"]) for r in rows) < 0.02
     checked = [r for r in rows if r["sunk_exudyn"] != ""]
     assert len(checked) == 3 and all(r["sunk_exudyn"] == r["sunk"] for r in checked)
+
+
+def test_an_arm_that_cannot_follow_the_motion_is_refused_before_teaching(motion):
+    from seds_casadi.game.reach import check_swing_accuracy
+
+    check_swing_accuracy(_scene(motion, "wam", "arctan"), 1.0)          # passes
+    with pytest.raises(ValueError, match=r"the ur3 does not follow the hitting motion on "
+                                         r"arctan at kappa 1.00 .*deg"):
+        check_swing_accuracy(_scene(motion, "ur3", "arctan"), 1.0)

@@ -40,7 +40,7 @@ from threadpoolctl import threadpool_limits
 from ..core._io import atomic_csv, atomic_text
 from ..core.demo_files import load_demonstrations
 from ..game.launch import calibrate_launch
-from ..game.reach import check_reach, fastest_gain
+from ..game.reach import check_reach, check_swing_accuracy, fastest_gain
 from ..game.scene import Scene
 from ..game.shot import Shot, play_round, play_shot
 from ..minigolf._progress import progress_bar
@@ -229,8 +229,11 @@ def _learn_and_teach(cfg: PlayConfig, fld, times: dict):
     fastest = fastest_gain(cfg.robot, fld, motion)
     _LOG.info("the %s swings within 2 %% of the commanded speed up to kappa %.2f (%.2f m/s)",
               cfg.robot, fastest, fastest * motion.hitting_speed)
-    times["reach and speed checks"] = time.perf_counter() - t1
-    scene = _measure_launch(cfg, Scene(cfg.robot, fld, motion), times)
+    scene = Scene(cfg.robot, fld, motion)
+    _, krange = _teacher_ranges(fld)
+    check_swing_accuracy(scene, fld.teacher.get("kappa", min(max(1.0, krange[0]), fastest)))
+    times["reach, speed and accuracy checks"] = time.perf_counter() - t1
+    scene = _measure_launch(cfg, scene, times)
     stroke = scene.stroke
     t1 = time.perf_counter()
     if cfg.strategies is not None:

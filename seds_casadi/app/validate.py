@@ -17,7 +17,7 @@ from threadpoolctl import threadpool_limits
 
 from ..core._io import atomic_csv, atomic_text
 from ..game.launch import calibrate_launch
-from ..game.reach import check_reach
+from ..game.reach import check_reach, check_swing_accuracy
 from ..game.scene import Scene, SceneSpec
 from ..game.shot import Shot, play_shot
 from ..minigolf._progress import progress_bar
@@ -89,6 +89,7 @@ def _learn(fld, robot: str, progress: bool, quick: bool = False):
     scene = Scene(robot, fld, motion)
     arange = fld.teacher.get("alpha_range", DEFAULTS["alpha_range"])
     krange = fld.teacher.get("kappa_range", DEFAULTS["kappa_range"])
+    check_swing_accuracy(scene, fld.teacher.get("kappa", max(1.0, krange[0])))
     scene = scene.with_launch(calibrate_launch(scene, arange, krange))
     data = collect_dataset(fld, scene.stroke, resolution=(81, 26) if quick else (121, 41),
                            progress=progress)

@@ -7,7 +7,7 @@ swing (0.3 m behind the ball, 5 cm up, turned by alpha: the default of
 those situations unplayable. :func:`check_reach` names them and says what to change.
 :func:`fastest_gain` measures how fast the robot can swing: the largest speed gain kappa it
 executes within 2 % of the commanded club speed (its joint velocity and torque limits cap the
-rest).
+rest); :func:`check_swing_accuracy` that it follows the motion's direction at the hit.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from ..motion.rotation import rotation_z
 from ..robots.placement import place_head, place_robot
 from ..robots.swing import simulate_swing
 
-__all__ = ["unreachable", "check_reach", "fastest_gain"]
+__all__ = ["unreachable", "check_reach", "fastest_gain", "check_swing_accuracy"]
 
 _START = np.array([-0.3, 0.0, 0.05])  # simulate_swing's default start, relative to the contact
 
@@ -98,3 +98,30 @@ def fastest_gain(robot: str, field, motion, ball=None, tolerance: float = 0.02,
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if ok(mid) else (lo, mid)
     return lo
+
+
+def check_swing_accuracy(scene, kappa: float, max_error_deg: float = 2.0) -> None:
+    """Before teaching: the robot follows the hitting motion at the field's declared ball
+    positions (three of the nine the reach check uses: first, middle, last), swinging straight
+    at the middle declared hole with gain ``kappa``; ``ValueError`` naming the direction errors
+    at the hit when one is above ``max_error_deg`` or the club misses the ball (an arm that
+    swings tens of degrees off, like the UR3 at the shipped putts' scale, would be taught shots
+    it cannot play)."""
+    from .shot import Shot, play_shots
+
+    balls = scene.field.situations.ball.design(9)[::4]
+    holes = scene.field.situations.hole.design(3)
+    hole = holes[len(holes) // 2]
+    shots = [Shot(b, hole, float(scene.stroke.aim(hole - b)[0]), float(kappa)) for b in balls]
+    results = play_shots(scene, shots)
+    bad = [r for r in results if not r.hit or r.direction_error_deg > max_error_deg]
+    if not bad:
+        return
+    errs = ", ".join(f"ball {np.round(r.shot.ball, 3).tolist()}: "
+                     + (f"{r.direction_error_deg:.1f} deg" if r.hit else r.reason)
+                     for r in results)
+    raise ValueError(
+        f"the {scene.robot} does not follow the hitting motion on {scene.field.name} at kappa "
+        f"{kappa:.2f} (direction error at the hit above {max_error_deg:g} deg, or no hit: "
+        f"{errs}): demonstrations at a scale this arm can follow, another base or another "
+        f"robot")
