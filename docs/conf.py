@@ -1,0 +1,96 @@
+"""Sphinx configuration of the seds_casadi documentation.
+
+Build: ``python -m sphinx -W -b html docs docs/_build/html`` (about a minute; CI runs it through
+``tests/test_docs.py``). The examples' gallery is not executed unless ``SEDS_DOCS_RUN_EXAMPLES``
+is set (``quick``: the examples' reduced size, ``full``: the paper's sizes, minutes to hours);
+otherwise each example page shows the figure saved in ``docs/`` where there is one.
+"""
+
+import os
+import sys
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE / "_ext"))
+
+from seds_gallery import ExampleArgv  # noqa: E402
+
+import seds_casadi  # noqa: E402
+
+project = "seds_casadi"
+author = "the seds_casadi authors"
+copyright = "2026, the seds_casadi authors"
+release = version = seds_casadi.__version__
+
+extensions = [
+    "sphinx.ext.autodoc",
+    "sphinx.ext.autosummary",
+    "sphinx.ext.mathjax",
+    "numpydoc",
+    "myst_parser",
+    "sphinx_gallery.gen_gallery",
+    "sphinxarg.ext",
+    "seds_api",
+    "seds_gallery",
+]
+
+source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
+root_doc = "index"
+exclude_patterns = ["_build", "auto_examples/*.ipynb", "auto_examples/*.py",
+                    "auto_examples/*.zip", "auto_examples/*.json", "auto_examples/*.md5"]
+templates_path = []
+
+# no network: no intersphinx inventories, MathJax only loaded by the reader's browser
+suppress_warnings = []
+nitpicky = False
+
+# --- autodoc / numpydoc ---------------------------------------------------------------------
+autodoc_default_options = {"member-order": "bysource"}
+autodoc_typehints = "none"  # numpydoc's Parameters sections give the types
+autosummary_generate = False
+numpydoc_show_class_members = False
+numpydoc_class_members_toctree = False
+numpydoc_xref_param_type = False
+numpydoc_validation_checks = set()
+
+# --- MyST -----------------------------------------------------------------------------------
+myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist"]
+myst_heading_anchors = 3
+
+# --- the examples' gallery --------------------------------------------------------------------
+RUN_EXAMPLES = os.environ.get("SEDS_DOCS_RUN_EXAMPLES", "").lower()
+if RUN_EXAMPLES not in ("", "0", "quick", "full"):
+    raise ValueError(f"SEDS_DOCS_RUN_EXAMPLES={RUN_EXAMPLES!r}: use quick, full or leave it unset")
+
+
+sphinx_gallery_conf = {
+    "examples_dirs": str(HERE.parent / "examples"),
+    "gallery_dirs": "auto_examples",
+    "plot_gallery": RUN_EXAMPLES in ("quick", "full"),
+    "reset_argv": ExampleArgv(quick=RUN_EXAMPLES == "quick"),
+    "filename_pattern": r"\.py$",
+    "download_all_examples": False,
+    "show_memory": False,
+    "show_signature": False,
+    "remove_config_comments": True,
+    "within_subsection_order": "FileNameSortKey",
+    "image_scrapers": ("matplotlib",),
+    "capture_repr": (),
+    "abort_on_example_error": True,
+    "write_computation_times": False,
+}
+
+# --- HTML -----------------------------------------------------------------------------------
+html_theme = "pydata_sphinx_theme"
+html_title = f"seds_casadi {release}"
+html_static_path = []
+html_theme_options = {
+    "navigation_with_keys": False,
+    "show_toc_level": 2,
+    "header_links_before_dropdown": 8,
+    "secondary_sidebar_items": ["page-toc"],
+    "footer_start": ["copyright"],
+    "footer_end": [],
+}
+html_show_sourcelink = False
+html_copy_source = False
