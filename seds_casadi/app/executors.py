@@ -19,13 +19,18 @@ __all__ = ["open_executor", "InlineExecutor", "stop_workers", "check_scheduler"]
 
 
 class InlineExecutor(Executor):
-    """Runs each task at once in this process (``workers=1``); errors surface in ``result()``."""
+    """Runs each task at once in this process (``workers=1``); errors surface in ``result()``.
+
+    An interruption (``KeyboardInterrupt`` from Ctrl-C or SIGTERM, ``SystemExit``) is raised by
+    ``submit`` itself: ``Executor.map`` submits every task before it returns, so an interruption
+    kept in the first task's future would let all the others run.
+    """
 
     def submit(self, fn, /, *args, **kwargs) -> Future:
         fut: Future = Future()
         try:
             fut.set_result(fn(*args, **kwargs))
-        except BaseException as exc:  # noqa: BLE001 - handed to the caller through the future
+        except Exception as exc:  # noqa: BLE001 - handed to the caller through the future
             fut.set_exception(exc)
         return fut
 

@@ -20,6 +20,7 @@ import casadi as ca
 import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin
 
+from ._signals import deferred_interrupts
 from .demonstrations import Demonstrations
 from .errors import ConvergenceWarning, SolverError, StabilityError
 from .model_selection import bic_n_components
@@ -50,13 +51,23 @@ STRENGTH_RADIUS_MAX = 0.25
 
 
 class _Progress(ca.Callback):
-    """IPOPT's iteration callback: a log line (INFO) at most every PROGRESS_SECONDS."""
+    """IPOPT's iteration callback: a log line (INFO) at most every PROGRESS_SECONDS, and a stop
+    request (IPOPT's ``User_Requested_Stop``) once an interrupt is pending.
+
+    CasADi catches what a callback raises: a ``KeyboardInterrupt`` raised here would end the
+    solve as ``NonIpopt_Exception_Thrown`` and never reach the caller. The signals' exceptions
+    are held by :class:`~seds_casadi.core._signals.deferred_interrupts` around the solve
+    (``interrupt``) and raised after it; one raised here all the same (no handler could be held,
+    e.g. one installed from C) is remembered in :attr:`interrupted` and raised after the solve.
+    """
 
     def __init__(self, nx: int, ng: int, label: str) -> None:
         ca.Callback.__init__(self)
         self.nx, self.ng, self.label = nx, ng, label
         self.iteration, self.t0 = 0, time.perf_counter()
         self._last = self.t0
+        self.interrupt: deferred_interrupts | None = None
+        self.interrupted = False
         self.construct("seds_progress", {})
 
     def get_n_in(self):
@@ -82,13 +93,19 @@ class _Progress(ca.Callback):
         return ca.Sparsity(0, 0)
 
     def eval(self, arg):
-        self.iteration += 1
-        now = time.perf_counter()
-        if now - self._last >= PROGRESS_SECONDS:
-            self._last = now
-            _LOG.info("%s: iteration %d, objective %.6g, %.1f s", self.label, self.iteration,
-                      float(arg[1]), now - self.t0)
-        return [0]
+        try:
+            if self.interrupted or (self.interrupt is not None and self.interrupt.pending):
+                return [1]
+            self.iteration += 1
+            now = time.perf_counter()
+            if now - self._last >= PROGRESS_SECONDS:
+                self._last = now
+                _LOG.info("%s: iteration %d, objective %.6g, %.1f s", self.label,
+                          self.iteration, float(arg[1]), now - self.t0)
+            return [0]
+        except KeyboardInterrupt:
+            self.interrupted = True
+            return [1]
 
 
 # ------------------------------------------------------------------ the learner
@@ -474,7 +491,8 @@ class SEDS(RegressorMixin, BaseEstimator):
         opts = dict(self._ipopt_options(settings, prob.hessian, constrained=bool(g)),
                     iteration_callback=progress)
         try:
-            solver = ca.nlpsol("seds", "ipopt", nlp, opts)
+            with deferred_interrupts():  # CasADi calls our callbacks' get_jacobian here
+                solver = ca.nlpsol("seds", "ipopt", nlp, opts)
         except RuntimeError as exc:
             if settings.solver_options and "option" in str(exc).lower():  # IPOPT printed the
                 # valid settings of a bad value above
@@ -491,8 +509,7 @@ class SEDS(RegressorMixin, BaseEstimator):
             gv = np.asarray(g_fun(theta)).ravel()
             return float(np.max(np.r_[0.0, bounds["lbg"] - gv, gv - bounds["ubg"]]))
 
-        res = solver(x0=prob.theta0, lbx=prob.lbx, ubx=prob.ubx, **bounds)
-        stats = solver.stats()
+        res, stats = _run(solver, progress, x0=prob.theta0, lbx=prob.lbx, ubx=prob.ubx, **bounds)
         status = str(stats.get("return_status", "unknown"))
         theta = np.asarray(res["x"]).ravel()
         J = float(res["f"])
@@ -507,15 +524,16 @@ class SEDS(RegressorMixin, BaseEstimator):
             # there with L-BFGS); the same fit from the start with L-BFGS: feasible to 1e-11
             # in 637 iterations. The feasible one of the two is kept.
             opts2 = dict(opts, **{"ipopt.hessian_approximation": "limited-memory"})
-            solver2 = ca.nlpsol("seds_feasible", "ipopt", nlp, opts2)
-            res2 = solver2(x0=prob.theta0, lbx=prob.lbx, ubx=prob.ubx, **bounds)
+            with deferred_interrupts():
+                solver2 = ca.nlpsol("seds_feasible", "ipopt", nlp, opts2)
+            res2, stats2 = _run(solver2, progress, x0=prob.theta0, lbx=prob.lbx, ubx=prob.ubx,
+                                **bounds)
             theta2 = np.asarray(res2["x"]).ravel()
             J2 = float(res2["f"])
             _LOG.info("%s: the exact-Hessian solve ended %.3g infeasible; with L-BFGS from the "
-                      "start: %s, %.3g", label, viol, solver2.stats().get("return_status"),
+                      "start: %s, %.3g", label, viol, stats2.get("return_status"),
                       violation(theta2))
             if np.all(np.isfinite(theta2)) and np.isfinite(J2) and violation(theta2) < viol:
-                stats2 = solver2.stats()
                 recovered = {"status": status, "iterations": int(stats.get("iter_count", -1)),
                              "constraint_violation": viol}
                 theta, J, viol = theta2, J2, violation(theta2)
@@ -615,6 +633,31 @@ class SEDS(RegressorMixin, BaseEstimator):
             v_star = float(sf(np.asarray(demos.target, dtype=float)))
             radius = max(radius, STRENGTH_STEPS * v_star * demos.estimated_dt())
         return sf, min(radius, STRENGTH_RADIUS_MAX * extent)
+
+
+def _run(solver, progress: _Progress, **inputs) -> tuple[dict, dict]:
+    """One IPOPT solve, interruptible: the solver's (results, stats).
+
+    Ctrl-C or SIGTERM while IPOPT iterates stops it at its next iteration and raises the
+    signal's ``KeyboardInterrupt`` here, so no model is built from the cut-short solve. A solve
+    that IPOPT ended on an exception inside CasADi (``NonIpopt_Exception_Thrown``: one of our
+    callbacks raised) is a :class:`SolverError`, never a model.
+    """
+    with deferred_interrupts() as interrupt:
+        progress.interrupt, progress.interrupted = interrupt, False
+        try:
+            res = solver(**inputs)
+        finally:
+            progress.interrupt = None
+    if progress.interrupted:
+        raise KeyboardInterrupt
+    stats = solver.stats()
+    status = str(stats.get("return_status", "unknown"))
+    if status in ("NonIpopt_Exception_Thrown", "User_Requested_Stop"):
+        raise SolverError("IPOPT stopped on an error raised inside it (see the messages above) "
+                          f"after {stats.get('iter_count')} iterations; no model is built from "
+                          "the cut-short solve", status)
+    return res, stats
 
 
 def _as_demonstrations(X, y, target) -> Demonstrations:

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 import exudyn as exu
 import numpy as np
 
+from ..core._signals import deferred_interrupts
 from ..minigolf.ball import RESTITUTION, capture_speed
 from ..minigolf.ball_physics import STOP_SPEED
 from ..minigolf.fields import Field
@@ -80,13 +81,17 @@ class ShotMonitor:
     (releasing the ball's holder at the first touch) and for the ball leaving the club; after
     it, it switches to the rolling phase once and then ends the shot when the ball drops into
     the hole (the fast model's capture speed), has been slower than the stop speed for
-    :data:`STOP_DURATION`, or leaves the field.
+    :data:`STOP_DURATION`, or leaves the field. It ends the shot at once when an interrupt
+    (Ctrl-C, SIGTERM) is pending in ``interrupt``: exudyn turns an exception raised in a user
+    function into its own error, so the run holds the signals' exceptions and raises them after
+    exudyn returns (:class:`~seds_casadi.core._signals.deferred_interrupts`).
     """
 
     def __init__(self, scene: Scene, max_wall_time: float) -> None:
         self.scene = scene
         self.state = scene.state
         self.max_wall_time = max_wall_time
+        self.interrupt: deferred_interrupts | None = None
         self._t0 = time.perf_counter()
         self._next_record = 0.0
 
@@ -101,6 +106,8 @@ class ShotMonitor:
 
     def pre_step(self, mbs, t: float) -> bool:
         """exudyn pre-step user function: False ends the current phase."""
+        if self.interrupt is not None and self.interrupt.pending:
+            return False
         st, sc = self.state, self.scene
         dt_step, st.t_prev = t - st.t_prev, t
         if self.elapsed > self.max_wall_time:
@@ -178,16 +185,33 @@ def _settings(start: float, end: float, largest_step: float, tol: float):
 
 def _run(scene: Scene, monitor: ShotMonitor, max_time: float, impact_phase: tuple[float, float],
          rolling_phase: tuple[float, float]) -> None:
-    """The two phases, (largest step, tolerance) each; exudyn's failures become RuntimeError."""
+    """The two phases, (largest step, tolerance) each; exudyn's failures become RuntimeError.
+    Ctrl-C or SIGTERM ends the shot at the next step and raises the signal's exception here."""
     mbs, st = scene.mbs, scene.state
     monitor.start()
     exu.SetWriteToConsole(False)  # its note on per-step allocations by user functions
+    try:
+        with deferred_interrupts() as interrupt:
+            monitor.interrupt = interrupt
+            _solve(mbs, st, max_time, impact_phase, rolling_phase, interrupt)
+    finally:
+        monitor.interrupt = None
+        exu.SetWriteToConsole(True)
+    if st.timed_out:
+        raise RuntimeError(
+            f"exudyn took more than {monitor.max_wall_time:g} s of computing and reached only "
+            f"t = {st.t_prev:.3f} s of the shot (its step control is taking tiny steps); "
+            "loosen tolerance or raise max_wall_time")
+
+
+def _solve(mbs, st, max_time: float, impact_phase: tuple[float, float],
+           rolling_phase: tuple[float, float], interrupt: deferred_interrupts) -> None:
     try:
         # the swing and the impact with short steps; the roll, once the ball is clear of the
         # club, continues from the same state with longer ones
         exu.SolveDynamic(mbs, _settings(0.0, max_time, *impact_phase),
                          solverType=exu.DynamicSolverType.DOPRI5)
-        if st.rolling_from is not None:
+        if st.rolling_from is not None and not interrupt.pending:
             sd = mbs.systemData
             sd.SetSystemState(sd.GetSystemState(exu.ConfigurationType.Current),
                               exu.ConfigurationType.Initial)
@@ -196,13 +220,6 @@ def _run(scene: Scene, monitor: ShotMonitor, max_time: float, impact_phase: tupl
     except Exception as exc:  # noqa: BLE001 - exudyn raises its own error types
         t_fail = st.path[-1][0] if st.path else 0.0
         raise RuntimeError(f"exudyn failed near t = {t_fail:.3f} s of the shot: {exc}") from None
-    finally:
-        exu.SetWriteToConsole(True)
-    if st.timed_out:
-        raise RuntimeError(
-            f"exudyn took more than {monitor.max_wall_time:g} s of computing and reached only "
-            f"t = {st.t_prev:.3f} s of the shot (its step control is taking tiny steps); "
-            "loosen tolerance or raise max_wall_time")
 
 
 def _result(scene: Scene, wall_time: float) -> ExudynShot:

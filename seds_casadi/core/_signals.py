@@ -1,0 +1,110 @@
+"""Interrupts across C code that swallows Python exceptions.
+
+CasADi calls our Python callbacks (the objective kernels, the progress line) from inside IPOPT
+and catches whatever they raise: a ``KeyboardInterrupt`` raised there by Ctrl-C (or by a
+SIGTERM handler that raises it) ends as IPOPT's ``NonIpopt_Exception_Thrown``, and the caller
+would take the cut-short solve for a finished one. :class:`deferred_interrupts` holds the
+signals' exceptions while such code runs: the handlers in force are still called at once, but
+what they raise is kept (:attr:`pending`), the running code asks its solver to stop (IPOPT's
+iteration callback returns 1), and the exception is raised when the block ends, in Python, where
+it reaches the caller.
+"""
+
+from __future__ import annotations
+
+import signal
+import threading
+
+#: the signals whose Python handlers are held (SIGTERM: the command line raises
+#: KeyboardInterrupt for it)
+SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+
+class deferred_interrupts:
+    """Context manager: what the SIGINT / SIGTERM handlers raise inside the block is raised at
+    its end instead (the first such exception; it wins over an exception the block raises).
+
+    Only the main thread can install signal handlers: in another thread (where signals are never
+    handled) the block changes nothing and :attr:`pending` stays ``False``. Blocks may nest; the
+    handlers are restored when the outermost one ends.
+    """
+
+    _lock = threading.Lock()
+    _depth = 0
+    _previous: dict = {}
+    _exception: BaseException | None = None
+
+    def __enter__(self) -> deferred_interrupts:
+        self._installed = False
+        if threading.current_thread() is not threading.main_thread():
+            return self
+        cls = type(self)
+        with cls._lock:
+            if cls._depth == 0:
+                # known to _hold before it is installed: a signal in between is not lost
+                cls._exception = None
+                cls._previous = {s: h for s in SIGNALS
+                                 if callable(h := signal.getsignal(s))}  # not SIG_DFL/IGN
+                try:
+                    _set_handlers(dict.fromkeys(cls._previous, _hold))
+                except BaseException:  # a signal before _hold was in place: back to before
+                    _set_handlers(cls._previous)
+                    cls._previous = {}
+                    raise
+            cls._depth += 1
+            self._installed = True
+        return self
+
+    @property
+    def pending(self) -> bool:
+        """Whether a signal's handler raised inside the block (the code should stop now)."""
+        return self._installed and type(self)._exception is not None
+
+    def __exit__(self, exc_type, exc, tb) -> bool:
+        if not self._installed:
+            return False
+        cls = type(self)
+        with cls._lock:
+            cls._depth -= 1
+            if cls._depth == 0:
+                try:
+                    _set_handlers(cls._previous)
+                finally:
+                    # read after the handlers are back: a signal in between is not lost
+                    held, cls._exception, cls._previous = cls._exception, None, {}
+            else:
+                held = cls._exception
+        if held is not None and held is not exc:
+            raise held
+        return False
+
+
+def _hold(signum, frame) -> None:
+    """The handler in force inside :class:`deferred_interrupts`: calls the previous one and
+    keeps what it raises."""
+    handler = deferred_interrupts._previous.get(signum)
+    if handler is None:
+        return
+    try:
+        handler(signum, frame)
+    except BaseException as exc:  # kept, raised at the block's end
+        if deferred_interrupts._exception is None:
+            deferred_interrupts._exception = exc
+
+
+def _set_handlers(handlers: dict) -> None:
+    """Install every handler of ``handlers`` (signal -> handler), even when a signal's handler
+    raises in between (then the first such exception is raised once all are in place): no
+    handler of ours is left behind, none of the caller's is lost."""
+    first = None
+    todo = list(handlers.items())
+    while todo:
+        try:
+            signal.signal(*todo[0])
+            todo.pop(0)
+        except (ValueError, OSError, TypeError):  # signal.signal's own errors
+            raise
+        except BaseException as exc:  # a signal's handler raised: finish, then raise it
+            first = first or exc
+    if first is not None:
+        raise first
