@@ -40,6 +40,9 @@ exclude_patterns = ["_build", "auto_examples/*.ipynb", "auto_examples/*.py",
                     "auto_examples/*.zip", "auto_examples/*.json", "auto_examples/*.md5"]
 templates_path = []
 
+# options such as --out stay two hyphens (no en dash), in the pages and in --help's text
+smartquotes = False
+
 # no network: no intersphinx inventories, MathJax only loaded by the reader's browser
 suppress_warnings = []
 nitpicky = False
@@ -87,7 +90,7 @@ html_static_path = []
 html_theme_options = {
     "navigation_with_keys": False,
     "show_toc_level": 2,
-    "header_links_before_dropdown": 8,
+    "header_links_before_dropdown": 6,
     "secondary_sidebar_items": ["page-toc"],
     "footer_start": ["copyright"],
     "footer_end": [],

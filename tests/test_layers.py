@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 PKG = Path(__file__).resolve().parents[1] / "seds_casadi"
-#: what each layer may import (besides itself); the order of the README's architecture section
+#: what each layer may import (besides itself); the order of the architecture table in docs/layers
 ALLOWED = {
     "codegen": set(),
     "core": {"codegen"},
@@ -91,8 +91,8 @@ def test_a_missing_extra_is_named_in_the_import_error():
 # the modules import each other without cycles, counting imports inside functions.
 
 ROOT = PKG.parent
-#: files that import the package as users do: the tests, examples, benchmarks and the README's
-#: code blocks
+#: files that import the package as users do: the tests, examples, benchmarks, and the code blocks
+#: of the README and of the documentation's pages (docs/**/*.md)
 USERS = ("tests", "examples", "benchmarks")
 
 #: imports exempt from the checks, as (importing module, imported module, name): none since the
@@ -189,16 +189,21 @@ def _imports(tree: ast.Module, importer: str, package: str | None, mods: dict[st
 
 def _user_trees(root: Path, users=USERS):
     """(label, tree) of the files that import the package as users: scripts, and the python code
-    blocks of the README."""
+    blocks of the README and of the documentation's Markdown pages."""
     for folder in users:
         for path in sorted((root / folder).rglob("*.py")):
             yield str(path.relative_to(root)), ast.parse(path.read_text())
-    readme = root / "README.md"
-    if readme.exists():
-        blocks = re.findall(r"```python\n(.*?)```", readme.read_text(), flags=re.S)
+    pages = [root / "README.md"]
+    if (root / "docs").is_dir():  # the documentation's pages, as tests/test_readme.py runs them
+        pages += sorted(p for p in (root / "docs").rglob("*.md")
+                        if not {"_build", "auto_examples"} & set(p.relative_to(root).parts))
+    for page in pages:
+        if not page.exists():
+            continue
+        blocks = re.findall(r"```python\n(.*?)```", page.read_text(), flags=re.S)
         for k, code in enumerate(blocks):
             try:
-                yield f"README.md (python block {k + 1})", ast.parse(code)
+                yield f"{page.relative_to(root)} (python block {k + 1})", ast.parse(code)
             except SyntaxError:
                 continue
 
@@ -317,6 +322,12 @@ def import_cycles(pkg_dir: Path, allowed=frozenset()) -> list[list[str]]:
         if v not in index:
             visit(v)
     return cycles
+
+
+def test_the_documentation_pages_code_blocks_are_checked_as_users():
+    labels = [label for label, _ in _user_trees(ROOT)]
+    assert any(label.startswith("README.md (python block") for label in labels)
+    assert sum(label.startswith("docs/getting_started.md (python block") for label in labels) >= 8
 
 
 def test_every_name_has_one_import_path():

@@ -1,4 +1,5 @@
-"""The README's Python blocks run as written, in order, in one fresh interpreter."""
+"""The Python blocks of the README and of the documentation's pages run as written, in order,
+one fresh interpreter per file (the README first, then each page of docs/ that has blocks)."""
 
 import os
 import re
@@ -13,19 +14,33 @@ pytestmark = pytest.mark.slow
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def readme_blocks() -> list[str]:
-    text = (ROOT / "README.md").read_text(encoding="utf-8")
-    return re.findall(r"```python\n(.*?)```", text, flags=re.S)
+def doc_files() -> list[Path]:
+    """README.md and the hand-written pages of docs/ (not the build, not the generated gallery)."""
+    docs = ROOT / "docs"
+    pages = sorted(p for p in docs.rglob("*.md")
+                   if not {"_build", "auto_examples"} & set(p.relative_to(docs).parts))
+    return [ROOT / "README.md", *pages]
 
 
-def test_the_readme_has_python_blocks():
-    assert len(readme_blocks()) >= 4
+def python_blocks(path: Path) -> list[str]:
+    """The ```python blocks of a Markdown file, in order."""
+    return re.findall(r"```python\n(.*?)```", path.read_text(encoding="utf-8"), flags=re.S)
 
 
-def test_every_readme_python_block_runs_in_order(tmp_path):
-    script = "\n\n".join(f"# --- README block {i}\n{b}" for i, b in enumerate(readme_blocks()))
-    (tmp_path / "readme_blocks.py").write_text(script, encoding="utf-8")
+FILES = [p for p in doc_files() if python_blocks(p)]
+
+
+def test_the_readme_and_the_tutorial_have_python_blocks():
+    assert python_blocks(ROOT / "README.md")
+    assert len(python_blocks(ROOT / "docs" / "getting_started.md")) >= 8
+
+
+@pytest.mark.parametrize("path", FILES, ids=[str(p.relative_to(ROOT)) for p in FILES])
+def test_every_python_block_runs_in_order(path, tmp_path):
+    blocks = python_blocks(path)
+    script = "\n\n".join(f"# --- {path.name} block {i}\n{b}" for i, b in enumerate(blocks))
+    (tmp_path / "blocks.py").write_text(script, encoding="utf-8")
     env = dict(os.environ, MPLBACKEND="Agg")
-    res = subprocess.run([sys.executable, "readme_blocks.py"], cwd=tmp_path, env=env,
+    res = subprocess.run([sys.executable, "blocks.py"], cwd=tmp_path, env=env,
                          capture_output=True, text=True, timeout=900)
     assert res.returncode == 0, res.stderr[-3000:]

@@ -229,7 +229,14 @@ def skip_foreign_members(app, what, name, obj, skip, options):
     return None
 
 
+#: abbreviations after which autosummary's first sentence goes on ("... system (Eq. 5-7).")
+ABBREVIATIONS = ("Eq.", "Eqs.", "Fig.", "Figs.", "Sec.", "cf.", "vs.", "approx.")
+
+
 def setup(app):
+    from sphinx.ext import autosummary
+
+    autosummary.WELL_KNOWN_ABBREVIATIONS = (*autosummary.WELL_KNOWN_ABBREVIATIONS, *ABBREVIATIONS)
     app.add_directive("seds-api", PublicAPI)
     app.connect("autodoc-process-docstring", escape_plain_text_math, priority=400)
     app.connect("autodoc-skip-member", skip_foreign_members)

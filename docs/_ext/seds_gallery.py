@@ -70,14 +70,38 @@ def _place_thumbnails(app) -> None:
             scale_image(str(figs[0]), str(thumb), 400, 280)
 
 
-_TITLE_RE = re.compile(r"^(?:Paper )?(.+?)(?:[:.](?:\s|$))", re.S)
+#: a full stop after these does not end a sentence
+_ABBREVIATIONS = ("Fig", "Figs", "Eq", "Eqs", "Sec", "e.g", "i.e", "vs", "cf")
 
 
-def _page_title(first_paragraph: str) -> str:
+def _page_title(first_paragraph: str, limit: int = 64) -> str:
+    """The docstring's first sentence, without "Paper " before a figure's or table's number;
+    a long one up to its colon ("Choosing SEDS's settings: ..."), or cut at a word near
+    ``limit`` characters."""
     text = " ".join(first_paragraph.split())
-    m = _TITLE_RE.match(text)
-    title = (m.group(1) if m else text).strip()
-    return title if len(title) <= 90 else title[:87].rsplit(" ", 1)[0] + " ..."
+    end = len(text)
+    for m in re.finditer(r"\.(\s|$)", text):
+        if not text[: m.start()].endswith(_ABBREVIATIONS):
+            end = m.start()
+            break
+    title = text[:end].strip().removeprefix("Paper ")
+    head, colon, _ = title.partition(": ")
+    if len(title) > limit and colon and len(head) >= 8 and not head.startswith(("Fig", "Table")):
+        title = head
+    if len(title) > limit:
+        title = title[:limit].rsplit(" ", 1)[0].rstrip(",;:") + " ..."
+    return title
+
+
+def _literal_commands(text: str) -> str:
+    """The docstring's ``python examples/...`` synopsis as a shell block, not a paragraph."""
+    out = []
+    for para in text.split("\n\n"):
+        if para.lstrip().startswith("python "):
+            body = "\n".join("   " + line for line in para.strip("\n").splitlines())
+            para = ".. code-block:: bash\n\n" + body
+        out.append(para)
+    return "\n\n".join(out)
 
 
 def _example_page(app, docname: str, source: list[str]) -> None:
@@ -96,7 +120,8 @@ def _example_page(app, docname: str, source: list[str]) -> None:
     head, rest = text[start:end], text[end:]
     first, _, more = head.partition("\n\n")
     title = _page_title(first)
-    lines = [title, "=" * len(title), "", f"``examples/{stem}.py``", "", first, "", more.rstrip(), ""]
+    lines = [title, "=" * len(title), "", f"``examples/{stem}.py``", "", first, "",
+             _literal_commands(more.rstrip()), ""]
     if not app.config.sphinx_gallery_conf.get("plot_gallery"):
         for fig in _figures(stem):
             lines += [f".. figure:: /{fig.name}", "   :width: 100%", "",
