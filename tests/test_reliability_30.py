@@ -246,3 +246,55 @@ def test_an_interrupted_command_exits_130_at_once(tmp_path, command, sig):
     assert not list(tmp_path.rglob(".tmp-*"))
     with pytest.raises(ProcessLookupError):  # no process of the run's group left
         os.killpg(run.proc.pid, 0)
+
+
+# ------------------------------------------------------------------ 2. nothing escapes --out
+def _files_outside(root, out) -> list:
+    return [p for p in root.rglob("*") if p.is_file() and out not in p.parents
+            and p.suffix != ".json"]
+
+
+@pytest.mark.parametrize("name", ["../../escaped", "a/b", ".hidden", "-x", "", "x" * 65])
+def test_a_field_name_that_is_not_a_plain_name_is_refused_before_any_work(tmp_path, capsys,
+                                                                          name):
+    """A field whose name would lead out of --out (table1 wrote datasets/../../escaped.npz
+    outside it) or make a hidden file is refused when the field is loaded, naming the entry;
+    nothing is written, inside --out or outside it."""
+    import json
+
+    from seds_casadi.app.cli import main
+    from seds_casadi.minigolf.fields import FIELDS_FOLDER, load_field
+
+    with open(os.path.join(FIELDS_FOLDER, "flat.json")) as fh:
+        spec = json.load(fh)
+    spec["name"] = name
+    path = tmp_path / "deep" / "field.json"
+    path.parent.mkdir()
+    path.write_text(json.dumps(spec))
+    with pytest.raises(ValueError, match="name .* is not a plain name"):
+        load_field(path)
+    out = tmp_path / "deep" / "er" / "out"
+    for command in (["table1", "--quick", "--no-figures", "--field", str(path)],
+                    ["play", "--quick", "--field", str(path)]):
+        code = main([*command, "--out", str(out)])
+        err = capsys.readouterr().err
+        assert code == 2 and "not a plain name" in err, err
+        assert not _files_outside(tmp_path, out) and not out.exists()
+
+
+def test_paths_under_out_take_plain_names_only(tmp_path):
+    """The one helper that builds a written path from an input's name: plain names inside
+    --out, anything else a ValueError (also for a Field built in Python, past the field
+    file's check)."""
+    from seds_casadi.app.outdir import path_under
+
+    out = tmp_path / "out"
+    (out / "datasets").mkdir(parents=True)
+    assert path_under(out, "datasets", "my_green-2.npz") == str(out / "datasets" /
+                                                                  "my_green-2.npz")
+    for bad in ("..", "../x.npz", "a/b.npz", "/etc/x", ".tmp-x", "", "a\\b", "x\x00y"):
+        with pytest.raises(ValueError, match="cannot be a file name under --out"):
+            path_under(out, "datasets", bad)
+    (out / "link").symlink_to(tmp_path)  # a folder in --out that leads elsewhere
+    with pytest.raises(ValueError, match="outside --out"):
+        path_under(out, "link", "x.npz")

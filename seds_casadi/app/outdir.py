@@ -7,7 +7,8 @@ on the same folder is refused at once instead of mixing its outputs with the fir
 lock file is removed at the end, and so is the folder if the command made it and left it
 empty) and removes the temporary files (``.tmp-*``, written by :mod:`seds_casadi.core._io`
 before an atomic rename) that a killed run left behind: while the lock is held no other run
-can be writing them.
+can be writing them. :func:`path_under` builds the path of every file a command names after
+its input (a field's name): plain names only, inside the folder.
 """
 
 from __future__ import annotations
@@ -17,6 +18,8 @@ import errno
 import fcntl
 import os
 from collections.abc import Iterator
+
+from ..core._io import is_plain_name
 
 #: name of the lock file inside an output folder
 LOCK_NAME = ".seds-casadi.lock"
@@ -41,6 +44,31 @@ def _check_writable(path: str) -> None:
     if not os.access(path, os.W_OK | os.X_OK):
         raise ValueError(f"--out {path!r} is not writable; choose another folder or change "
                          f"its permissions")
+
+
+def path_under(out: str | os.PathLike, *parts: str) -> str:
+    """The path ``out/part/...`` of a file a command writes, every part a plain name
+    (:func:`~seds_casadi.core._io.is_plain_name`; e.g. ``"datasets", f"{field.name}.npz"``).
+
+    Raises
+    ------
+    ValueError
+        A part is not a plain name (``..``, a path separator, a leading dot, ...), or the path
+        would lie outside ``out`` (a folder in it that is a link to elsewhere): nothing is
+        written outside ``--out``.
+    """
+    for part in parts:
+        if not is_plain_name(part):
+            raise ValueError(f"{part!r} cannot be a file name under --out {os.fspath(out)!r}: "
+                             "only letters, digits, '.', '_' and '-' (at most 64, not "
+                             "starting with '.' or '-'); rename what it was made from (a "
+                             "field's 'name', say)")
+    path = os.path.join(os.fspath(out), *parts)
+    root = os.path.realpath(out)
+    if os.path.commonpath([root, os.path.realpath(path)]) != root:
+        raise ValueError(f"{path} would be written outside --out {os.fspath(out)!r} (through "
+                         "a link); nothing is written outside it")
+    return path
 
 
 def sweep_temporary_files(path: str) -> list[str]:

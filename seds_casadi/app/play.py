@@ -57,6 +57,7 @@ from ..motion.putting_demos import load_hitting_demos
 from ..robots.models import load_robot, robot_names
 from ._config import names_tuple, whole_number, with_overrides
 from .executors import InlineExecutor, open_executor
+from .outdir import path_under
 from .play_figures import play_figures, strategy_figure
 from .replay import write_replay
 from .shot_table import SHOT_COLUMNS, shot_row
@@ -408,9 +409,9 @@ def _play(cfg: PlayConfig, fld, ex, started: float) -> dict:
     motion.save(motion_dir)
     # the scene every shot is played in (workers load it once each from the saved motion)
     scene = Scene(cfg.robot, fld, motion, data.stroke.launch_table, motion_dir)
-    data.save(os.path.join(cfg.out, "models", f"dataset_{fld.name}.npz"))
+    data.save(path_under(cfg.out, "models", f"dataset_{fld.name}.npz"))
     if strategies is not None:
-        strategies.save(os.path.join(cfg.out, "models", f"strategies_{fld.name}.npz"))
+        strategies.save(path_under(cfg.out, "models", f"strategies_{fld.name}.npz"))
     t2 = time.perf_counter()
     _LOG.info("fitting the hitting-parameter models (%s) ...", ", ".join(cfg.learners))
     # one BLAS thread: on busy cores OpenBLAS's threads on these small matrices made GPR's

@@ -25,6 +25,7 @@ from ..minigolf.table1 import (
     write_table1_csv,
 )
 from ._config import names_tuple, whole_number, with_overrides
+from .outdir import path_under
 
 __all__ = ["table1_command", "Table1Config", "fig10", "fig11"]
 
@@ -135,7 +136,7 @@ def _teach(cfg: Table1Config, fields: list, stroke) -> dict:
         t1 = time.perf_counter()
         _LOG.info("situations on %s: %s", f.name, f.situations.describe())
         ds = collect_dataset(f, stroke, progress=cfg.progress, **teacher_kw)
-        ds.save(os.path.join(cfg.out, "datasets", f"{f.name}.npz"))
+        ds.save(path_under(cfg.out, "datasets", f"{f.name}.npz"))
         fixed = f", kappa {ds.kappa[0]:.3f}" if ds.strategy == "fixed_speed" else ""
         _LOG.info("teacher on %s: %d good shots (%s%s; %d situations without one; %.1f s)",
                   f.name, len(ds), ds.strategy, fixed, ds.dropped, time.perf_counter() - t1)

@@ -1,11 +1,22 @@
-"""Atomic file writes: a partial file never appears under the final name."""
+"""Atomic file writes (a partial file never appears under the final name) and the names that
+may become file names."""
 
 from __future__ import annotations
 
 import csv
 import os
+import re
 import tempfile
 from collections.abc import Iterable
+
+#: a name that may become a file name under an output folder: letters, digits, '.', '_', '-',
+#: not starting with '.' or '-' (no hidden file, no option, no '..'), at most 64 characters
+PLAIN_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9._-]{0,63}")
+
+
+def is_plain_name(name) -> bool:
+    """Whether ``name`` is a :data:`PLAIN_NAME` (so it cannot lead out of a folder)."""
+    return isinstance(name, str) and PLAIN_NAME.fullmatch(name) is not None
 
 
 def umask() -> int:

@@ -1,6 +1,8 @@
 """The schema of a field file, checked before a field is built: the entries each level may
 hold (an unknown or misspelt one is an error with a "did you mean"), their JSON types, and the
-size limits that keep a field from allocating more than a computer has.
+size limits that keep a field from allocating more than a computer has. A field's ``name`` is a
+plain name (:data:`~seds_casadi.core._io.PLAIN_NAME`: letters, digits, ``.``, ``_``, ``-``, at
+most 64, not starting with ``.`` or ``-``): the commands name files after it.
 
 The limits: a field at most :data:`MAX_EXTENT` metres on a side; at most :data:`MAX_HILLS` hills
 and :data:`MAX_BUMPS` random bumps; a height map of at most :data:`MAX_HEIGHTMAP_VALUES`
@@ -14,6 +16,8 @@ from __future__ import annotations
 
 import difflib
 import math
+
+from ..core._io import is_plain_name
 
 __all__ = ["check_field_spec", "did_you_mean", "FIELD_KEYS", "SURFACE_KEYS", "TEACHER_KEYS",
            "MAX_EXTENT", "MAX_HILLS", "MAX_BUMPS", "MAX_HEIGHTMAP_VALUES", "MAX_TABLE_POINTS",
@@ -76,6 +80,12 @@ def check_field_spec(spec: dict, source: str) -> None:
     _numbers(spec, ("wall_restitution", "stimp", "rolling_resistance"), source)
     if "name" in spec and not isinstance(spec["name"], str):
         raise ValueError(f"{source}: name: a text is needed, got {spec['name']!r}")
+    if "name" in spec and not is_plain_name(spec["name"]):
+        raise ValueError(
+            f"{source}: name {spec['name']!r} is not a plain name: the commands name files "
+            "after it (datasets/NAME.npz, models/dataset_NAME.npz), so it may hold only "
+            "letters, digits, '.', '_' and '-', at most 64, not starting with '.' or '-' "
+            "(e.g. 'my_green_2')")
     hole = spec.get("hole")
     if hole is not None:
         if not isinstance(hole, dict):
