@@ -4,6 +4,7 @@ Build: ``python -m sphinx -W -b html docs docs/_build/html`` (about a minute; CI
 ``tests/test_docs.py``). The examples' gallery is not executed unless ``SEDS_DOCS_RUN_EXAMPLES``
 is set (``quick``: the examples' reduced size, ``full``: the paper's sizes, minutes to hours);
 otherwise each example page shows the figure saved in ``docs/`` where there is one.
+``SEDS_DOCS_EXAMPLES=REGEX`` runs only the scripts whose path matches.
 """
 
 import os
@@ -43,7 +44,13 @@ templates_path = []
 # options such as --out stay two hyphens (no en dash), in the pages and in --help's text
 smartquotes = False
 
-# no network: no intersphinx inventories, MathJax only loaded by the reader's browser
+# no network: no intersphinx inventories, MathJax only loaded by the reader's browser (from its
+# CDN; SEDS_DOCS_MATHJAX=URL takes another copy, e.g. Debian's libjs-mathjax for offline reading:
+# file:///usr/share/javascript/mathjax/MathJax.js?config=TeX-AMS-MML_HTMLorMML)
+if os.environ.get("SEDS_DOCS_MATHJAX"):
+    mathjax_path = os.environ["SEDS_DOCS_MATHJAX"]
+    if "MathJax.js" in mathjax_path:  # MathJax 2: MyST marks the pages' text tex2jax_ignore
+        mathjax2_config = {"tex2jax": {"processClass": "math", "ignoreClass": "tex2jax_ignore"}}
 suppress_warnings = []
 nitpicky = False
 
@@ -71,7 +78,8 @@ sphinx_gallery_conf = {
     "gallery_dirs": "auto_examples",
     "plot_gallery": RUN_EXAMPLES in ("quick", "full"),
     "reset_argv": ExampleArgv(quick=RUN_EXAMPLES == "quick"),
-    "filename_pattern": r"\.py$",
+    # SEDS_DOCS_EXAMPLES=REGEX runs only the matching scripts (the others show their saved figure)
+    "filename_pattern": os.environ.get("SEDS_DOCS_EXAMPLES", r"\.py$"),
     "download_all_examples": False,
     "show_memory": False,
     "show_signature": False,

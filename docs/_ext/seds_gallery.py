@@ -56,8 +56,6 @@ def _figures(stem: str) -> list[Path]:
 def _place_thumbnails(app) -> None:
     """Before sphinx-gallery runs: each example's thumbnail from its saved figure (sphinx-gallery
     keeps a thumbnail that exists when the example itself made no figure)."""
-    if app.config.sphinx_gallery_conf.get("plot_gallery"):
-        return
     from sphinx_gallery.gen_rst import scale_image
 
     thumbs = DOCS / app.config.sphinx_gallery_conf["gallery_dirs"] / "images" / "thumb"
@@ -104,6 +102,13 @@ def _literal_commands(text: str) -> str:
     return "\n\n".join(out)
 
 
+def _executed(app, stem: str) -> bool:
+    """Whether sphinx-gallery runs this example in this build."""
+    conf = app.config.sphinx_gallery_conf
+    script = Path(conf["examples_dirs"]) / f"{stem}.py"
+    return bool(conf.get("plot_gallery") and re.search(conf["filename_pattern"], str(script)))
+
+
 def _example_page(app, docname: str, source: list[str]) -> None:
     """A title, the script's name and, when not run, its saved figure on each example's page."""
     gallery = app.config.sphinx_gallery_conf["gallery_dirs"]
@@ -122,7 +127,7 @@ def _example_page(app, docname: str, source: list[str]) -> None:
     title = _page_title(first)
     lines = [title, "=" * len(title), "", f"``examples/{stem}.py``", "", first, "",
              _literal_commands(more.rstrip()), ""]
-    if not app.config.sphinx_gallery_conf.get("plot_gallery"):
+    if not _executed(app, stem):
         for fig in _figures(stem):
             lines += [f".. figure:: /{fig.name}", "   :width: 100%", "",
                       f"   The figure ``examples/{stem}.py`` draws (saved in ``docs/{fig.name}``).",
