@@ -35,6 +35,25 @@ def test_the_readme_and_the_tutorial_have_python_blocks():
     assert len(python_blocks(ROOT / "docs" / "getting_started.md")) >= 8
 
 
+def test_the_readme_is_a_front_page_of_at_most_250_lines():
+    lines = (ROOT / "README.md").read_text(encoding="utf-8").splitlines()
+    assert len(lines) <= 250, f"README.md has {len(lines)} lines: move detail into docs/"
+
+
+def test_relative_links_of_the_readme_and_the_pages_exist():
+    """``[text](path)`` and ``<img src="path">`` links that are not URLs point at files."""
+    broken = []
+    for page in doc_files():
+        text = page.read_text(encoding="utf-8")
+        for target in re.findall(r"\]\(([^)\s]+)\)", text) + re.findall(r'src="([^"]+)"', text):
+            if re.match(r"[a-z]+:", target) or target.startswith("#"):
+                continue
+            path = (page.parent / target.split("#")[0]).resolve()
+            if not path.exists():
+                broken.append(f"{page.relative_to(ROOT)}: {target}")
+    assert not broken, broken
+
+
 @pytest.mark.parametrize("path", FILES, ids=[str(p.relative_to(ROOT)) for p in FILES])
 def test_every_python_block_runs_in_order(path, tmp_path):
     blocks = python_blocks(path)
