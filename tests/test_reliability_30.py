@@ -298,3 +298,158 @@ def test_paths_under_out_take_plain_names_only(tmp_path):
     (out / "link").symlink_to(tmp_path)  # a folder in --out that leads elsewhere
     with pytest.raises(ValueError, match="outside --out"):
         path_under(out, "link", "x.npz")
+
+
+# ------------------------------------------------------------------ 3. reads that end
+_READERS = _PRELUDE + r"""
+import json, os, sys, time
+from seds_casadi import StableDS, load_demonstrations
+from seds_casadi.app.cli import main
+from seds_casadi.minigolf.fields import load_field
+from seds_casadi.minigolf.hitting_data import HittingDataset
+from seds_casadi.motion.hitting import HittingMotion
+
+folder = sys.argv[1]
+os.mkdir(os.path.join(folder, "motion"))
+def path(name, target=None):
+    p = os.path.join(folder, name)
+    if target is None:
+        os.mkfifo(p)
+    else:
+        os.symlink(target, p)
+    return p
+
+cases = [
+    ("model, a named pipe", StableDS.load, path("model.npz")),
+    ("CSV, a named pipe", load_demonstrations, path("demos.csv")),
+    ("npz demonstrations, a named pipe", load_demonstrations, path("demos.npz")),
+    ("field, a named pipe", load_field, path("field.json")),
+    ("data set, a named pipe", HittingDataset.load, path("dataset.npz")),
+    ("motion, a named pipe", HittingMotion.load, os.path.dirname(path("motion/stable_ds.npz"))),
+    ("CSV, /dev/zero", load_demonstrations, path("zero.csv", "/dev/zero")),
+    ("npz demonstrations, /dev/zero", load_demonstrations, path("zero.npz", "/dev/zero")),
+    ("model, /dev/urandom", StableDS.load, path("random.npz", "/dev/urandom")),
+    ("field, /dev/zero", load_field, path("zero.json", "/dev/zero")),
+    ("fit command, a named pipe", lambda p: main(["fit", p, "--out", os.path.join(folder, "o")]),
+     path("cli.csv")),
+    ("table1 command, /dev/zero", lambda p: main(["table1", "--field", p, "--out",
+                                                  os.path.join(folder, "t")]),
+     path("cli.json", "/dev/zero")),
+]
+for what, read, p in cases:
+    t = time.perf_counter()
+    try:
+        result = read(p)
+        message = f"returned {result!r}"
+    except Exception as exc:
+        message = f"{type(exc).__name__}: {exc}"
+    print(json.dumps([what, message, time.perf_counter() - t]), flush=True)
+"""
+
+
+def test_named_pipes_and_devices_are_refused_at_once(tmp_path):
+    """A named pipe as a model, CSV, field, data set or motion file blocked forever in open();
+    /dev/zero or /dev/urandom was read until memory ran out. Every reader refuses them before
+    opening them (in a subprocess with a timeout: a regression cannot hang the suite), and the
+    command line prints one error line (exit 2)."""
+    import json
+
+    r = subprocess.run([sys.executable, "-c", _READERS, str(tmp_path)], capture_output=True,
+                       text=True, env=_env(), timeout=30)
+    assert r.returncode == 0, r.stderr[-3000:]
+    results = [json.loads(line) for line in r.stdout.splitlines() if line.startswith("[")]
+    assert len(results) == 12, r.stdout + r.stderr[-3000:]
+    for what, message, seconds in results:
+        assert seconds < 1.0, (what, seconds)
+        if "command" in what:
+            assert message == "returned 2", (what, message)
+        else:
+            assert "is not a regular file" in message, (what, message)
+            assert message.split(":")[0] in ("ModelFileError", "InputFileError"), message
+    assert r.stderr.count("is not a regular file") == 2, r.stderr  # the commands' error lines
+
+
+def _model_file(path) -> None:
+    import numpy as np
+
+    from seds_casadi import StableDS
+
+    I2 = np.eye(2)
+    StableDS(np.ones(1), np.zeros((1, 4)), np.block([[I2, -I2], [-I2, 2 * I2]])[None],
+             np.zeros(2)).save(path)
+
+
+def _peak_mb(read, path) -> tuple[str, float, float]:
+    """What ``read(path)`` raised, the peak of Python's and numpy's allocations meanwhile
+    [MB], and its seconds."""
+    import tracemalloc
+
+    tracemalloc.start()
+    t = time.perf_counter()
+    try:
+        read(path)
+        message = "no error"
+    except ValueError as exc:
+        message = str(exc)
+    finally:
+        seconds = time.perf_counter() - t
+        peak = tracemalloc.get_traced_memory()[1] / 1e6
+        tracemalloc.stop()
+    return message, peak, seconds
+
+
+def test_a_zip_bomb_in_a_model_file_is_refused_before_it_is_decompressed(tmp_path):
+    """A model file whose ``version`` entry decompresses to 50 MB (a zip bomb; the fuzz's had
+    1 GB in a 975 kB file: 6 s and 1 GB before it was refused) is refused from the archive's
+    declared sizes, without decompressing: small peak memory, at once."""
+    import numpy as np
+
+    from seds_casadi import ModelFileError, StableDS
+
+    path = tmp_path / "model.npz"
+    _model_file(path)
+    with np.load(path) as z:
+        data = {k: z[k] for k in z.files}
+    data["version"] = np.zeros(50_000_000, np.uint8)
+    np.savez_compressed(path, **data)
+    assert path.stat().st_size < 1_000_000
+    message, peak, seconds = _peak_mb(StableDS.load, path)
+    assert "entry 'version' holds 50 MB uncompressed, more than the 4096 bytes" in message
+    assert peak < 10 and seconds < 1.0, (peak, seconds)
+    with pytest.raises(ModelFileError):
+        StableDS.load(path)
+
+
+def test_an_npz_entry_that_declares_more_than_it_holds_is_refused_before_allocating(tmp_path):
+    """numpy allocates the shape an entry's header declares before reading it: a 1 kB
+    demonstrations file declaring 40 million values made it allocate 320 MB. The declared size
+    must be what the entry holds."""
+    import io
+    import zipfile
+
+    import numpy as np
+
+    from seds_casadi import load_demonstrations
+
+    path = tmp_path / "demos.npz"
+    header = io.BytesIO()
+    np.lib.format.write_array_header_1_0(
+        header, {"descr": "<f8", "fortran_order": False, "shape": (20_000_000, 2)})
+    with zipfile.ZipFile(path, "w") as z:
+        z.writestr("pos_0.npy", header.getvalue() + np.zeros(20).tobytes())
+    message, peak, seconds = _peak_mb(load_demonstrations, path)
+    assert "entry 'pos_0.npy' declares (20000000, 2) values of float64 but holds 160" in message
+    assert peak < 10 and seconds < 1.0, (peak, seconds)
+
+
+def test_files_larger_than_their_kind_may_be_are_refused_by_size(tmp_path):
+    """The size bound comes before parsing: a sparse 70 MB field file (its bound is 64 MB) is
+    refused from its size, naming both."""
+    from seds_casadi.minigolf.fields import load_field
+
+    path = tmp_path / "big.json"
+    with open(path, "wb") as fh:
+        fh.truncate(70 * 1024 * 1024)
+    message, peak, seconds = _peak_mb(load_field, path)
+    assert message == f"{path} is 73.4 MB, more than the 67.1 MB a field file may be"
+    assert peak < 10 and seconds < 1.0

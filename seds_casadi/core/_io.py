@@ -1,13 +1,17 @@
-"""Atomic file writes (a partial file never appears under the final name) and the names that
-may become file names."""
+"""Atomic file writes (a partial file never appears under the final name), the names that may
+become file names, and guarded reads: every file the project reads is opened by
+:func:`open_regular` (a regular file of bounded size, checked before it is opened) and every
+``.npz`` by :func:`read_npz` (each entry's uncompressed size checked before decompressing)."""
 
 from __future__ import annotations
 
 import csv
 import os
 import re
+import stat
 import tempfile
 from collections.abc import Iterable
+from typing import IO
 
 #: a name that may become a file name under an output folder: letters, digits, '.', '_', '-',
 #: not starting with '.' or '-' (no hidden file, no option, no '..'), at most 64 characters
@@ -99,20 +103,149 @@ def data_folder(package: str) -> str:
     return os.fspath(files(package))
 
 
-def npz_value_count(path: str | os.PathLike) -> int:
-    """Number of values in an ``.npz`` file, read from its arrays' headers (nothing is loaded,
-    so a size limit can be checked before allocating)."""
+class InputFileError(ValueError):
+    """A file given to read is not a regular file, or is larger than its kind may be (checked
+    before it is opened, parsed or decompressed)."""
+
+
+def _megabytes(n: float) -> str:
+    return f"{n / 1e6:.3g} MB"
+
+
+def _check_stat(path: str, st: os.stat_result, max_bytes: int, what: str) -> None:
+    if stat.S_ISDIR(st.st_mode):
+        raise InputFileError(f"{path} is a folder, not a {what}")
+    if not stat.S_ISREG(st.st_mode):
+        kind = ("a named pipe" if stat.S_ISFIFO(st.st_mode) else
+                "a device" if stat.S_ISCHR(st.st_mode) or stat.S_ISBLK(st.st_mode) else
+                "a socket" if stat.S_ISSOCK(st.st_mode) else "not a plain file")
+        raise InputFileError(f"{path} is not a regular file ({kind}); give a {what} saved on "
+                             "disk")
+    if st.st_size > max_bytes:
+        raise InputFileError(f"{path} is {_megabytes(st.st_size)}, more than the "
+                             f"{_megabytes(max_bytes)} a {what} may be")
+
+
+def open_regular(path: str | os.PathLike, max_bytes: int, what: str, text: bool = False,
+                 **kwargs) -> IO:
+    """Open a file for reading once it is known to be a regular file of at most ``max_bytes``.
+
+    A named pipe, a device (``/dev/zero``, ``/dev/urandom``) or a socket would block in
+    ``open()`` or be read until memory runs out: the path is checked with ``os.stat`` before
+    it is opened, and again (``fstat``) on what was opened (opened without blocking, so a file
+    swapped for a pipe in between cannot hang either).
+
+    Parameters
+    ----------
+    path : path-like
+    max_bytes : int
+        Largest size accepted.
+    what : str
+        What the file should be, for the messages (``"field file"``).
+    text : bool
+        Open in text mode (``kwargs``: ``encoding``, ``newline``), else binary.
+
+    Raises
+    ------
+    FileNotFoundError
+        No file at ``path``.
+    InputFileError
+        A folder, not a regular file, or larger than ``max_bytes`` (a ``ValueError`` naming
+        the path).
+    """
+    path = os.fspath(path)
+    _check_stat(path, os.stat(path), max_bytes, what)
+    fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
+    try:
+        _check_stat(path, os.fstat(fd), max_bytes, what)
+        os.set_blocking(fd, True)
+        return os.fdopen(fd, "r" if text else "rb", **kwargs)
+    except BaseException:
+        os.close(fd)
+        raise
+
+
+#: bytes an ``.npz`` file's members may hold beyond 8 per value (array headers, texts)
+NPZ_OVERHEAD_BYTES = 64 * 1024 * 1024
+
+
+def read_npz(path: str | os.PathLike, what: str, max_values: int,
+             member_bytes: dict[str, int] | None = None,
+             only: tuple[str, ...] | None = None) -> dict:
+    """The arrays of an ``.npz`` file (no pickle), with every size checked before anything is
+    decompressed or allocated.
+
+    The file must be a regular file (:func:`open_regular`); each member's uncompressed size, as
+    the archive declares it (``ZipInfo.file_size``: decompression stops there), is checked
+    against ``member_bytes`` (by entry name) and their sum against ``8 * max_values`` plus
+    :data:`NPZ_OVERHEAD_BYTES`; then the number of values the arrays' headers declare against
+    ``max_values``. A small file that decompresses to gigabytes (a zip bomb) is refused
+    without being decompressed.
+
+    Parameters
+    ----------
+    path : path-like
+    what : str
+        What the file should be, for the messages.
+    max_values : int
+        Most values (array elements) the file may hold.
+    member_bytes : dict of str -> int, optional
+        Largest uncompressed size of named entries (e.g. a scalar ``version``).
+    only : tuple of str, optional
+        Load only these entries (those present).
+
+    Raises
+    ------
+    FileNotFoundError
+        No file at ``path``.
+    InputFileError
+        Not a regular file, or larger than allowed (before decompressing).
+    ValueError, zipfile.BadZipFile, OSError
+        Not an ``.npz`` file, or an entry numpy cannot read without pickle.
+    """
     import zipfile
 
     import numpy as np
 
-    total = 0
-    with zipfile.ZipFile(path) as z:
-        for name in z.namelist():
-            with z.open(name) as fh:
-                version = np.lib.format.read_magic(fh)
-                read = (np.lib.format.read_array_header_1_0 if version == (1, 0)
-                        else np.lib.format.read_array_header_2_0)
-                shape, _, _ = read(fh)
-                total += int(np.prod(shape, dtype=float))
-    return total
+    path = os.fspath(path)
+    max_bytes = 8 * int(max_values) + NPZ_OVERHEAD_BYTES
+    limits = member_bytes or {}
+    with open_regular(path, max_bytes, what) as fh:
+        with zipfile.ZipFile(fh) as z:
+            infos = z.infolist()
+            total = 0
+            for info in infos:
+                name = info.filename[:-4] if info.filename.endswith(".npy") else info.filename
+                limit = limits.get(name)
+                if limit is not None and info.file_size > limit:
+                    raise InputFileError(
+                        f"{path}: entry {name!r} holds {_megabytes(info.file_size)} "
+                        f"uncompressed, more than the {limit} bytes it may in a {what}")
+                total += info.file_size
+            if total > max_bytes:
+                raise InputFileError(f"{path}: its entries hold {_megabytes(total)} "
+                                     f"uncompressed, more than the {_megabytes(max_bytes)} a "
+                                     f"{what} may")
+            values = 0
+            for info in infos:
+                with z.open(info) as member:
+                    version = np.lib.format.read_magic(member)
+                    read = (np.lib.format.read_array_header_1_0 if version == (1, 0)
+                            else np.lib.format.read_array_header_2_0)
+                    shape, _, dtype = read(member)
+                    n = int(np.prod(shape, dtype=float))
+                    values += n
+                    # numpy allocates what the header declares before reading: it must be
+                    # what the entry holds
+                    if not dtype.hasobject and n * dtype.itemsize + member.tell() != \
+                            info.file_size:
+                        raise InputFileError(
+                            f"{path}: entry {info.filename!r} declares {shape} values of "
+                            f"{dtype} but holds {info.file_size - member.tell()} bytes of "
+                            "data; the file is corrupt")
+            if values > max_values:
+                raise InputFileError(f"{path}: {values:.0f} values, more than the "
+                                     f"{max_values} a {what} may hold")
+        fh.seek(0)
+        with np.load(fh, allow_pickle=False) as f:
+            return {k: f[k] for k in f.files if only is None or k in only}

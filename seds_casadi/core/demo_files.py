@@ -18,7 +18,7 @@ import re
 
 import numpy as np
 
-from ._io import atomic_npz, npz_value_count
+from ._io import InputFileError, atomic_npz, open_regular, read_npz
 from .demonstrations import Demonstrations
 
 
@@ -30,6 +30,16 @@ def load_demonstrations(path: str | os.PathLike, **kwargs) -> Demonstrations:
     path : str or path-like
     **kwargs
         Passed to :class:`Demonstrations` (``smoothing``, ``trim_speed``, ``target``, ...).
+
+    Raises
+    ------
+    FileNotFoundError
+        No file at ``path``.
+    ValueError
+        Anything wrong with the file, naming it: also a path that is not a regular file (a
+        named pipe, ``/dev/zero``: refused before it is opened) or a file larger than
+        :data:`MAX_VALUES` values allow (refused from its size, and for ``.npz`` from each
+        entry's declared uncompressed size, before anything is read or decompressed).
     """
     path = os.fspath(path)
     if not os.path.exists(path):
@@ -65,15 +75,12 @@ def _indexed(path: str, found: dict[int, str], what: str) -> int:
 
 def _npz_entries(path: str) -> dict[str, np.ndarray]:
     try:
-        total = npz_value_count(path)
-        if total <= MAX_VALUES:
-            with np.load(path, allow_pickle=False) as f:
-                return {k: f[k] for k in f.files}
+        return read_npz(path, "demonstrations file", MAX_VALUES)
+    except InputFileError:  # not a regular file, or too large (before decompressing)
+        raise
     except Exception as exc:  # noqa: BLE001 - any reader failure is a bad file
         raise ValueError(f"{path}: not a readable .npz file without pickled objects "
                          f"({type(exc).__name__}: {exc})") from None
-    raise ValueError(f"{path}: {total:.0f} values is more than the {MAX_VALUES} a "
-                     "demonstrations file may hold; subsample the demonstrations")
 
 
 def _load_npz(path: str, kwargs: dict) -> Demonstrations:
@@ -134,11 +141,9 @@ def _demonstrations(path: str, pos, kw) -> Demonstrations:
 def _csv_rows(path: str) -> tuple[list[str], list[tuple[int, list[str]]]]:
     """Header and data rows (with their line numbers) of a CSV file; a UTF-8 BOM, quotes and
     ``#`` comment lines are understood."""
-    if os.path.getsize(path) > 40 * MAX_VALUES:
-        raise ValueError(f"{path}: the file is larger than {40 * MAX_VALUES // 1_000_000} MB; "
-                         "subsample the demonstrations")
     try:
-        with open(path, encoding="utf-8-sig", newline="") as fh:
+        with open_regular(path, 40 * MAX_VALUES, "demonstrations file", text=True,
+                          encoding="utf-8-sig", newline="") as fh:
             rows = [(i + 1, r) for i, r in enumerate(csv.reader(fh))
                     if r and any(c.strip() for c in r) and not r[0].lstrip().startswith("#")]
     except UnicodeDecodeError as exc:

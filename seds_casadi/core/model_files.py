@@ -19,12 +19,16 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ._io import atomic_npz, npz_value_count
+from ._io import InputFileError, atomic_npz, read_npz
 from .errors import ModelFileError
 
 _RESERVED = ("format", "version", "meta", "checksum")
-#: most values a guarded file may hold (checked from the headers before anything is loaded)
+#: most values a guarded file may hold (checked from the headers before anything is loaded;
+#: the file's size and its entries' uncompressed sizes are bounded by 8 bytes a value)
 MAX_VALUES = 100_000_000
+#: largest uncompressed size of the small entries (a zip bomb in ``version`` is refused
+#: before it is decompressed)
+RESERVED_BYTES = {"format": 4096, "version": 4096, "checksum": 4096}
 
 
 def numpy_json(value):
@@ -111,17 +115,18 @@ def read_guarded(path: str | os.PathLike, kind: str, versions: tuple[int, ...],
     FileNotFoundError
         No file at ``path``.
     ModelFileError
-        Anything else that is wrong with the file (the message names the entry).
+        Anything else that is wrong with the file (the message names the entry): also a path
+        that is not a regular file (a named pipe, a device), a file larger than
+        :data:`MAX_VALUES` values allow, or an entry whose uncompressed size is more than it
+        may be (checked before anything is decompressed).
     """
     path = os.fspath(path)
     try:
-        size = npz_value_count(path)
-        if size > MAX_VALUES:
-            raise ValueError(f"{size:.0f} values, more than the {MAX_VALUES} a model file holds")
-        with np.load(path, allow_pickle=False) as f:
-            data = {k: f[k] for k in f.files}
+        data = read_npz(path, f"{kind} file", MAX_VALUES, member_bytes=RESERVED_BYTES)
     except FileNotFoundError:
         raise
+    except InputFileError as exc:  # not a regular file, too large: the message names it
+        raise ModelFileError(str(exc)) from None
     except Exception as exc:  # noqa: BLE001 - any reader failure means a bad file
         raise ModelFileError(f"{path}: not a readable {kind} file ({exc})") from None
     missing = [k for k in ("format", "version", meta_key, "checksum") if k not in data]

@@ -34,9 +34,10 @@ import casadi as ca
 import numpy as np
 
 from ..codegen import CachedFunctionMixin, batch_evaluate
+from ._io import read_npz
 from .errors import ConvergenceWarning, ModelFileError, StabilityError
 from .gmm import responsibilities_sx
-from .model_files import read_guarded, write_guarded
+from .model_files import MAX_VALUES, RESERVED_BYTES, read_guarded, write_guarded
 from .strength import StrengthFactor, as_points
 
 FORMAT = "seds_casadi.StableDS"
@@ -523,8 +524,9 @@ def _check_strength(strength, radius, d: int) -> tuple[StrengthFactor | None, fl
 def _peek_version(path) -> int | None:
     """The file's ``version`` entry if it can be read (read_guarded reports every other fault)."""
     try:
-        with np.load(os.fspath(path), allow_pickle=False) as f:
-            return int(f["version"]) if "version" in f.files else None
+        data = read_npz(path, f"{FORMAT} file", MAX_VALUES, member_bytes=RESERVED_BYTES,
+                        only=("version",))
+        return int(data["version"]) if "version" in data else None
     except FileNotFoundError:
         raise
     except Exception:  # noqa: BLE001 - read_guarded says what is wrong with the file

@@ -74,7 +74,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core._io import data_folder
+from ..core._io import data_folder, open_regular
 from .field_schema import MAX_FILE_BYTES, TEACHER_KEYS, check_field_spec, did_you_mean
 from .situations import Situations
 from .surface import Surface
@@ -262,7 +262,12 @@ def field_names() -> list[str]:
 
 def load_field(name_or_path: str | os.PathLike) -> Field:
     """A shipped field by name (``"flat"``, ``"rough_flat"``, ``"double_hill"``, ``"arctan"``)
-    or a field file of your own (``.json``, format in the module docstring)."""
+    or a field file of your own (``.json``, format in the module docstring).
+
+    A field file must be a regular file of at most
+    :data:`~seds_casadi.minigolf.field_schema.MAX_FILE_BYTES` bytes (a named pipe or a device
+    is refused before it is opened), and its ``name`` a plain name (it names the files the
+    commands write); anything wrong is a ``ValueError`` naming the file and the entry."""
     s = os.fspath(name_or_path)
     path = s if (s.endswith(".json") or os.sep in s) else os.path.join(FIELDS_FOLDER, s + ".json")
     if not os.path.exists(path):
@@ -271,11 +276,9 @@ def load_field(name_or_path: str | os.PathLike) -> Field:
                          f"{', '.join(field_names())}")
     if os.path.isdir(path):
         raise ValueError(f"{path} is a folder; give a .json field file or a field name")
-    if os.path.getsize(path) > MAX_FILE_BYTES:
-        raise ValueError(f"{path}: {os.path.getsize(path)} bytes; a field file may have at most "
-                         f"{MAX_FILE_BYTES}")
     try:
-        with open(path, encoding="utf-8-sig") as fh:
+        with open_regular(path, MAX_FILE_BYTES, "field file", text=True,
+                          encoding="utf-8-sig") as fh:
             spec = json.load(fh)
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise ValueError(f"{path}: not valid JSON ({exc})") from None
