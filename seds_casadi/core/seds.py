@@ -474,72 +474,74 @@ class SEDS(RegressorMixin, BaseEstimator):
             strength, radius = self._fit_strength(demos, settings)
         prob = build_problem(demos, ps)
         theta_sym = ca.MX.sym("theta", prob.layout.size)
-        objective = prob.kernels.nlp_objective()  # keep alive while the solver runs
-        nlp = {"x": theta_sym, "f": objective(theta_sym)}
-        g, lbg, ubg, user = self._constraints(prob, settings, theta_sym)
-        bounds = {}
-        if g:
-            nlp["g"] = ca.vertcat(*g)
-            bounds = {"lbg": np.concatenate(lbg), "ubg": np.concatenate(ubg)}
-        label = (f"SEDS fit ({ps.objective}, K={prob.layout.K}, d={prob.layout.d}, "
-                 f"{prob.layout.formulation}, P {prob.layout.lyapunov}, "
-                 f"{prob.X.shape[0]} samples, {prob.layout.size} parameters, "
-                 f"{prob.hessian} Hessian)")
-        _LOG.info("%s: solving with IPOPT (problem built in %.1f s)", label,
-                  time.perf_counter() - t0)
-        progress = _Progress(prob.layout.size, int(nlp["g"].numel()) if "g" in nlp else 0, label)
-        opts = dict(self._ipopt_options(settings, prob.hessian, constrained=bool(g)),
-                    iteration_callback=progress)
-        try:
-            with deferred_interrupts():  # CasADi calls our callbacks' get_jacobian here
+        # CasADi calls our Python callbacks (construction, derivatives, iterations) and turns
+        # what they raise into its own errors: Ctrl-C / SIGTERM are held until the block ends
+        # (IPOPT stops at its next iteration once one is pending; see _run)
+        with deferred_interrupts():
+            objective = prob.kernels.nlp_objective()  # keep alive while the solver runs
+            nlp = {"x": theta_sym, "f": objective(theta_sym)}
+            g, lbg, ubg, user = self._constraints(prob, settings, theta_sym)
+            bounds = {}
+            if g:
+                nlp["g"] = ca.vertcat(*g)
+                bounds = {"lbg": np.concatenate(lbg), "ubg": np.concatenate(ubg)}
+            label = (f"SEDS fit ({ps.objective}, K={prob.layout.K}, d={prob.layout.d}, "
+                     f"{prob.layout.formulation}, P {prob.layout.lyapunov}, "
+                     f"{prob.X.shape[0]} samples, {prob.layout.size} parameters, "
+                     f"{prob.hessian} Hessian)")
+            _LOG.info("%s: solving with IPOPT (problem built in %.1f s)", label,
+                      time.perf_counter() - t0)
+            progress = _Progress(prob.layout.size, int(nlp["g"].numel()) if "g" in nlp else 0, label)
+            opts = dict(self._ipopt_options(settings, prob.hessian, constrained=bool(g)),
+                        iteration_callback=progress)
+            try:
                 solver = ca.nlpsol("seds", "ipopt", nlp, opts)
-        except RuntimeError as exc:
-            if settings.solver_options and "option" in str(exc).lower():  # IPOPT printed the
-                # valid settings of a bad value above
-                raise ValueError(f"IPOPT refused solver_options {dict(settings.solver_options)!r}: "
-                                 f"{str(exc).splitlines()[-1].split(': ', 1)[-1]} (names as "
-                                 "in IPOPT's documentation, e.g. 'mu_strategy')") from None
-            raise
-        t_built = time.perf_counter()
-        g_fun = ca.Function("g", [theta_sym], [nlp["g"]]) if g else None
+            except RuntimeError as exc:
+                if settings.solver_options and "option" in str(exc).lower():  # IPOPT printed the
+                    # valid settings of a bad value above
+                    raise ValueError(f"IPOPT refused solver_options {dict(settings.solver_options)!r}: "
+                                     f"{str(exc).splitlines()[-1].split(': ', 1)[-1]} (names as "
+                                     "in IPOPT's documentation, e.g. 'mu_strategy')") from None
+                raise
+            t_built = time.perf_counter()
+            g_fun = ca.Function("g", [theta_sym], [nlp["g"]]) if g else None
 
-        def violation(theta) -> float:
-            if g_fun is None:
-                return 0.0
-            gv = np.asarray(g_fun(theta)).ravel()
-            return float(np.max(np.r_[0.0, bounds["lbg"] - gv, gv - bounds["ubg"]]))
+            def violation(theta) -> float:
+                if g_fun is None:
+                    return 0.0
+                gv = np.asarray(g_fun(theta)).ravel()
+                return float(np.max(np.r_[0.0, bounds["lbg"] - gv, gv - bounds["ubg"]]))
 
-        res, stats = _run(solver, progress, x0=prob.theta0, lbx=prob.lbx, ubx=prob.ubx, **bounds)
-        status = str(stats.get("return_status", "unknown"))
-        theta = np.asarray(res["x"]).ravel()
-        J = float(res["f"])
-        if not (np.all(np.isfinite(theta)) and np.isfinite(J)):
-            raise SolverError("IPOPT returned non-finite parameters or objective", status)
-        viol = violation(theta)
-        recovered = None
-        if (status not in _OK_STATUS and viol > _FEASIBLE and prob.hessian == Hessian.EXACT
-                and "hessian_approximation" not in str(settings.solver_options)):
-            # the exact Hessian of a constrained fit can stall infeasible (an arrival-constraint
-            # fit ended 4e-5 infeasible after 1,000 iterations, and so did a warm start from
-            # there with L-BFGS); the same fit from the start with L-BFGS: feasible to 1e-11
-            # in 637 iterations. The feasible one of the two is kept.
-            opts2 = dict(opts, **{"ipopt.hessian_approximation": "limited-memory"})
-            with deferred_interrupts():
+            res, stats = _run(solver, progress, x0=prob.theta0, lbx=prob.lbx, ubx=prob.ubx, **bounds)
+            status = str(stats.get("return_status", "unknown"))
+            theta = np.asarray(res["x"]).ravel()
+            J = float(res["f"])
+            if not (np.all(np.isfinite(theta)) and np.isfinite(J)):
+                raise SolverError("IPOPT returned non-finite parameters or objective", status)
+            viol = violation(theta)
+            recovered = None
+            if (status not in _OK_STATUS and viol > _FEASIBLE and prob.hessian == Hessian.EXACT
+                    and "hessian_approximation" not in str(settings.solver_options)):
+                # the exact Hessian of a constrained fit can stall infeasible (an arrival-constraint
+                # fit ended 4e-5 infeasible after 1,000 iterations, and so did a warm start from
+                # there with L-BFGS); the same fit from the start with L-BFGS: feasible to 1e-11
+                # in 637 iterations. The feasible one of the two is kept.
+                opts2 = dict(opts, **{"ipopt.hessian_approximation": "limited-memory"})
                 solver2 = ca.nlpsol("seds_feasible", "ipopt", nlp, opts2)
-            res2, stats2 = _run(solver2, progress, x0=prob.theta0, lbx=prob.lbx, ubx=prob.ubx,
-                                **bounds)
-            theta2 = np.asarray(res2["x"]).ravel()
-            J2 = float(res2["f"])
-            _LOG.info("%s: the exact-Hessian solve ended %.3g infeasible; with L-BFGS from the "
-                      "start: %s, %.3g", label, viol, stats2.get("return_status"),
-                      violation(theta2))
-            if np.all(np.isfinite(theta2)) and np.isfinite(J2) and violation(theta2) < viol:
-                recovered = {"status": status, "iterations": int(stats.get("iter_count", -1)),
-                             "constraint_violation": viol}
-                theta, J, viol = theta2, J2, violation(theta2)
-                status = str(stats2.get("return_status", "unknown"))
-                stats = dict(stats2, iter_count=int(stats.get("iter_count", 0))
-                             + int(stats2.get("iter_count", 0)))
+                res2, stats2 = _run(solver2, progress, x0=prob.theta0, lbx=prob.lbx, ubx=prob.ubx,
+                                    **bounds)
+                theta2 = np.asarray(res2["x"]).ravel()
+                J2 = float(res2["f"])
+                _LOG.info("%s: the exact-Hessian solve ended %.3g infeasible; with L-BFGS from the "
+                          "start: %s, %.3g", label, viol, stats2.get("return_status"),
+                          violation(theta2))
+                if np.all(np.isfinite(theta2)) and np.isfinite(J2) and violation(theta2) < viol:
+                    recovered = {"status": status, "iterations": int(stats.get("iter_count", -1)),
+                                 "constraint_violation": viol}
+                    theta, J, viol = theta2, J2, violation(theta2)
+                    status = str(stats2.get("return_status", "unknown"))
+                    stats = dict(stats2, iter_count=int(stats.get("iter_count", 0))
+                                 + int(stats2.get("iter_count", 0)))
         converged = status in _OK_STATUS
         if viol > 1e-6 and settings.approach_direction is not None:
             raise SolverError(
