@@ -314,6 +314,11 @@ from seds_casadi.motion.hitting import HittingMotion
 
 folder = sys.argv[1]
 os.mkdir(os.path.join(folder, "motion"))
+
+
+def _load_robot(p):
+    from seds_casadi.robots.models import load_robot   # the [robots] extra
+    return load_robot(p)
 def path(name, target=None):
     p = os.path.join(folder, name)
     if target is None:
@@ -338,6 +343,7 @@ cases = [
     ("table1 command, /dev/zero", lambda p: main(["table1", "--field", p, "--out",
                                                   os.path.join(folder, "t")]),
      path("cli.json", "/dev/zero")),
+    ("URDF, a named pipe", _load_robot, path("arm.urdf")),
 ]
 for what, read, p in cases:
     t = time.perf_counter()
@@ -361,14 +367,15 @@ def test_named_pipes_and_devices_are_refused_at_once(tmp_path):
                        text=True, env=_env(), timeout=30)
     assert r.returncode == 0, r.stderr[-3000:]
     results = [json.loads(line) for line in r.stdout.splitlines() if line.startswith("[")]
-    assert len(results) == 12, r.stdout + r.stderr[-3000:]
+    assert len(results) == 13, r.stdout + r.stderr[-3000:]
     for what, message, seconds in results:
         assert seconds < 1.0, (what, seconds)
         if "command" in what:
             assert message == "returned 2", (what, message)
         else:
             assert "is not a regular file" in message, (what, message)
-            assert message.split(":")[0] in ("ModelFileError", "InputFileError"), message
+            assert message.split(":")[0] in ("ModelFileError", "InputFileError",
+                                             "ValueError"), message
     assert r.stderr.count("is not a regular file") == 2, r.stderr  # the commands' error lines
 
 

@@ -19,8 +19,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..core._io import open_regular
 from .club import DEFAULT_CLUBS, Club
 from .urdf import ROBOTS_FOLDER
+
+#: the largest URDF file read [bytes] (the shipped ones and example-robot-data's are < 100 kB)
+MAX_URDF_BYTES = 16 * 2**20
 
 # ----------------------------------------------------------------------------- registry
 _ERD_ARMS = {
@@ -200,7 +204,8 @@ def load_robot(name_or_path: str, club: Club | None = None, base=(0.0, 0.0, 0.0,
         raise ValueError(f"unknown robot {s!r}; known: {', '.join(robot_names())}, or a path "
                          f"to a .urdf file")
     try:
-        with open(path, encoding="utf-8") as fh:
+        # a regular file of bounded size: a pipe or a device as the URDF is refused, not read
+        with open_regular(path, MAX_URDF_BYTES, "URDF file", text=True, encoding="utf-8") as fh:
             model = pin.buildModelFromXML(_revolute_only(fh.read()))
     except (RuntimeError, ValueError, OSError) as exc:
         raise ValueError(f"{path}: the URDF failed to load ({exc})") from None
