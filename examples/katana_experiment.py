@@ -61,6 +61,17 @@ def shot(ball, hole, label):
     return Shot(ball, hole, a, kappa, method=label)
 
 
+def _top_view(ax, title, legend_at):
+    """The green from above, the same window in every panel."""
+    ax.set_aspect("equal")
+    ax.set_xlim(-0.35, 0.55)
+    ax.set_ylim(-0.3, 0.3)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.legend(fontsize=7, loc=legend_at)
+    ax.set_title(title, fontsize=9)
+
+
 balls_y = [0.0, -0.18] if args.quick else [0.0, -0.06, -0.12, -0.18]
 holes_y = [0.0, 0.16] if args.quick else [0.0, 0.08, 0.16]
 cases = {"7a": [shot(np.array([0.0, y]), hole0, f"ball y {y:+.2f}") for y in balls_y],
@@ -81,13 +92,7 @@ for ax, (fig7, shots) in zip(axs[:2], cases.items()):
         ax.plot(res.path[:, 0], res.path[:, 1], ":", color=line.get_color(), lw=1)
         ax.plot(*s.ball, "o", color="w", mec="k", ms=6)
         ax.add_patch(plt.Circle(s.hole, field.hole_radius, fill=False, color=line.get_color()))
-    ax.set_aspect("equal")
-    ax.set_xlim(-0.35, 0.55)
-    ax.set_ylim(-0.3, 0.3)
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
-    ax.legend(fontsize=7, loc="lower right")
-    ax.set_title(f"Fig. {fig7}: club head (solid) and ball (dotted) from above", fontsize=9)
+    _top_view(ax, f"Fig. {fig7}: club head (solid) and ball (dotted) from above", "lower right")
 
 # Fig. 8: the ball pushed along -y during the swing; GPR re-aims every tick (no re-planning)
 ax = axs[2]
@@ -123,13 +128,7 @@ for t in times:
 ax.plot(*ball0, "o", color="w", mec="k", ms=6, label="ball")
 ax.plot(*(ball0 + push), "o", color="0.7", mec="k", ms=6, label="ball after the push")
 ax.add_patch(plt.Circle(hole0, field.hole_radius, fill=False, color="k"))
-ax.set_aspect("equal")
-ax.set_xlim(-0.35, 0.55)
-ax.set_ylim(-0.3, 0.3)
-ax.set_xlabel("x [m]")
-ax.set_ylabel("y [m]")
-ax.legend(fontsize=7, loc="upper left")
-ax.set_title("Fig. 8: the ball pushed 3 cm along -y during the swing", fontsize=9)
+_top_view(ax, "Fig. 8: the ball pushed 3 cm along -y during the swing", "upper left")
 fig.tight_layout()
 fig.suptitle(f"The Katana on katana_flat (SEDS K = 3, strength factor of 2 components, GPR; "
              f"kappa {kappa:.2f})", fontsize=10, y=1.02)
