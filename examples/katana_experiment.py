@@ -45,9 +45,7 @@ motion = HittingMotionLearner(n_components=3, strength_components=2).fit(
     load_hitting_demos()).motion_
 field = load_field("katana_flat")
 scene = Scene("katana", field, motion)
-teacher = field.teacher
-scene = scene.with_launch(calibrate_launch(scene, teacher.get("alpha_range", (-40, 40)),
-                                           teacher["kappa_range"]))
+scene = scene.with_launch(calibrate_launch(scene))   # over the field's teacher's ranges
 data = collect_dataset(field, scene.stroke, **({"resolution": (81, 26)} if args.quick else {}))
 gpr = make_model("gpr").fit(data.situations, data.outputs)
 kappa = float(data.kappa[0])   # the teacher's fixed speed

@@ -471,3 +471,12 @@ def test_an_arm_too_slow_for_the_nearest_putt_is_refused_before_any_search(strat
     k = float(np.linalg.norm(STROKE.launch_velocity(0.0, 1.0)[0]) / STROKE.speed)
     Teacher(field, STROKE.with_launch(LaunchTable(*grid, np.full((2, 2), k), np.zeros((2, 2)))),
             strategy, kappa_range=(0.6, 2.4))
+
+
+def test_the_teachers_search_box_comes_from_the_field_file_or_the_defaults():
+    from seds_casadi.minigolf.teacher import DEFAULTS, teacher_ranges
+
+    assert teacher_ranges(load_field("arctan")) == ((-40.0, 40.0), (0.6, 2.4))   # its file
+    assert teacher_ranges(load_field("flat")) == (DEFAULTS["alpha_range"],
+                                                  DEFAULTS["kappa_range"])
+    assert teacher_ranges(load_field("katana_flat"))[1] == (0.2, 0.72)

@@ -51,7 +51,7 @@ from ..minigolf.strategies import StrategySet, explore
 from ..minigolf.strategy_choice import StrategyChoice
 from ..minigolf.stroke import Stroke
 from ..minigolf.table1 import N_COMPONENTS, training_indices
-from ..minigolf.teacher import DEFAULTS
+from ..minigolf.teacher import teacher_ranges
 from ..motion.hitting import HittingMotion, HittingMotionLearner
 from ..motion.putting_demos import load_hitting_demos
 from ..robots.models import load_robot, robot_names
@@ -195,18 +195,12 @@ def _reuse_models(models: str, fld, strategies=None):
     return motion, data, ss
 
 
-def _teacher_ranges(fld) -> tuple[tuple, tuple]:
-    """The teacher's (alpha_range [deg], kappa_range) for the field."""
-    return (tuple(fld.teacher.get("alpha_range", DEFAULTS["alpha_range"])),
-            tuple(fld.teacher.get("kappa_range", DEFAULTS["kappa_range"])))
-
-
 def _measure_launch(cfg: PlayConfig, scene: Scene, times: dict) -> Scene:
     """The robot's launch over the teacher's (alpha, kappa) ranges
     (:func:`~seds_casadi.game.launch.calibrate_launch`): the scene the teacher searches."""
     t = time.perf_counter()
-    arange, krange = _teacher_ranges(scene.field)
-    table = calibrate_launch(scene, arange, krange)
+    arange, krange = teacher_ranges(scene.field)
+    table = calibrate_launch(scene)
     times["the robot's launch"] = time.perf_counter() - t
     f = table.speed_factor[table.speed_factor > 0]
     _LOG.info("the %s's launch: %.2f-%.2f x the commanded club speed over alpha %g..%g deg, "
@@ -231,7 +225,7 @@ def _learn_and_teach(cfg: PlayConfig, fld, times: dict):
     _LOG.info("the %s swings within 2 %% of the commanded speed up to kappa %.2f (%.2f m/s)",
               cfg.robot, fastest, fastest * motion.hitting_speed)
     scene = Scene(cfg.robot, fld, motion)
-    _, krange = _teacher_ranges(fld)
+    _, krange = teacher_ranges(fld)
     check_swing_accuracy(scene, fld.teacher.get("kappa", min(max(1.0, krange[0]), fastest)))
     times["reach, speed and accuracy checks"] = time.perf_counter() - t1
     scene = _measure_launch(cfg, scene, times)

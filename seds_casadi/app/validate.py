@@ -23,7 +23,7 @@ from ..game.shot import Shot, play_shot
 from ..minigolf._progress import progress_bar
 from ..minigolf.fields import load_field
 from ..minigolf.parameters import make_model
-from ..minigolf.teacher import DEFAULTS, collect_dataset
+from ..minigolf.teacher import collect_dataset, teacher_ranges
 from ..motion.hitting import HittingMotionLearner
 from ..motion.putting_demos import load_hitting_demos
 from ._config import whole_number, with_overrides
@@ -87,10 +87,9 @@ def _learn(fld, robot: str, progress: bool, quick: bool = False):
     t0 = time.perf_counter()
     motion = HittingMotionLearner(n_components=3).fit(load_hitting_demos()).motion_
     scene = Scene(robot, fld, motion)
-    arange = fld.teacher.get("alpha_range", DEFAULTS["alpha_range"])
-    krange = fld.teacher.get("kappa_range", DEFAULTS["kappa_range"])
+    _, krange = teacher_ranges(fld)
     check_swing_accuracy(scene, fld.teacher.get("kappa", max(1.0, krange[0])))
-    scene = scene.with_launch(calibrate_launch(scene, arange, krange))
+    scene = scene.with_launch(calibrate_launch(scene))
     data = collect_dataset(fld, scene.stroke, resolution=(81, 26) if quick else (121, 41),
                            progress=progress)
     check_reach(robot, fld, data.ball, data.alpha, motion.hitting_direction,

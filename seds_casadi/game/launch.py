@@ -14,12 +14,13 @@ from __future__ import annotations
 import numpy as np
 
 from ..minigolf.stroke import LaunchTable
+from ..minigolf.teacher import teacher_ranges
 from .scene import Scene
 from .shot import swing_launch
 
 
-def calibrate_launch(scene: Scene, alpha_range=(-40.0, 40.0), kappa_range=(0.6, 2.4),
-                     n_alpha: int = 7, n_kappa: int = 7, ball=None) -> LaunchTable:
+def calibrate_launch(scene: Scene, alpha_range=None, kappa_range=None, n_alpha: int = 7,
+                     n_kappa: int = 7, ball=None) -> LaunchTable:
     """Measure the scene robot's launch over a grid of hitting parameters.
 
     A measurement, not a learner: a pure function of the scene that returns a value (the
@@ -28,10 +29,11 @@ def calibrate_launch(scene: Scene, alpha_range=(-40.0, 40.0), kappa_range=(0.6, 
     Parameters
     ----------
     scene : Scene
-    alpha_range : (float, float)
-        Hitting angles [deg] (the teacher's ``alpha_range``).
-    kappa_range : (float, float)
-        Speed gains (the teacher's ``kappa_range``).
+    alpha_range : (float, float), optional
+        Hitting angles [deg]; default the field's teacher's ``alpha_range``
+        (:func:`~seds_casadi.minigolf.teacher.teacher_ranges`).
+    kappa_range : (float, float), optional
+        Speed gains; default the field's teacher's ``kappa_range``.
     n_alpha, n_kappa : int
         Grid points (at least 2 each): ``n_alpha * n_kappa`` swings, each simulated up to
         its hit (about 0.05 s).
@@ -53,6 +55,9 @@ def calibrate_launch(scene: Scene, alpha_range=(-40.0, 40.0), kappa_range=(0.6, 
     """
     if int(n_alpha) < 2 or int(n_kappa) < 2:
         raise ValueError(f"n_alpha and n_kappa must be at least 2, got {n_alpha}, {n_kappa}")
+    default_alpha, default_kappa = teacher_ranges(scene.field)
+    alpha_range = default_alpha if alpha_range is None else alpha_range
+    kappa_range = default_kappa if kappa_range is None else kappa_range
     lo, hi = (float(v) for v in alpha_range)
     klo, khi = (float(v) for v in kappa_range)
     if not (lo < hi and 0 < klo < khi):

@@ -54,7 +54,8 @@ from .fields import TEACHER_STRATEGIES, Field, load_field
 from .hitting_data import HittingDataset, paper_situations
 from .stroke import Stroke
 
-__all__ = ["Teacher", "TeachingError", "success_map", "collect_dataset", "FIXED_SPEED_OVERSHOOT",
+__all__ = ["Teacher", "TeachingError", "success_map", "collect_dataset", "teacher_ranges",
+           "FIXED_SPEED_OVERSHOOT",
            "default_strategy", "components"]
 
 FIXED_SPEED_OVERSHOOT = 0.6  # m past the hole for the fixed-speed strategy's default gain
@@ -74,6 +75,14 @@ class TeachingError(ValueError):
     def __init__(self, message: str, balls: np.ndarray, holes: np.ndarray) -> None:
         super().__init__(message)
         self.balls, self.holes = balls, holes
+
+
+def teacher_ranges(field: Field) -> tuple[tuple[float, float], tuple[float, float]]:
+    """The teacher's search box for a field: (alpha_range [deg], kappa_range), from the field
+    file's ``"teacher"`` entry or :data:`DEFAULTS`."""
+    t = field.teacher
+    return (tuple(float(v) for v in t.get("alpha_range", DEFAULTS["alpha_range"])),
+            tuple(float(v) for v in t.get("kappa_range", DEFAULTS["kappa_range"])))
 
 
 def default_strategy(field: Field) -> str:
