@@ -122,5 +122,5 @@ print(f"GPR on the 28 equally spaced: angle error median {np.median(err):.2f} de
       f"{np.sqrt(np.mean(err ** 2)):.2f}; inside the nearer edge {np.mean(err < ha[test]):.0%};"
       f" held-out situations sunk {sunk.mean():.0%}")
 
-means, _ = run_table1({"arctan": (field, ds)}, args.repetitions, 0)
+means, _ = run_table1({"arctan": (field, ds)}, args.repetitions, 0, protocol="grid")
 print(format_table1(means))

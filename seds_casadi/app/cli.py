@@ -190,7 +190,7 @@ def _add_lasa(sub, quiet) -> None:
 
 
 def _add_table1(sub, quiet) -> None:
-    from ..minigolf.table1 import TABLE1_FIELDS
+    from ..minigolf.table1 import PROTOCOLS, TABLE1_FIELDS
 
     t = sub.add_parser("table1", help="reproduce the paper's Table 1 on the simulated fields",
                        parents=[quiet],
@@ -209,6 +209,10 @@ def _add_table1(sub, quiet) -> None:
     t.add_argument("--demos", default=None,
                    help="demonstrations of the hitting motion (.npz/.csv) [shipped putts]")
     t.add_argument("--no-figures", action="store_true", help="skip Fig. 10 and 11")
+    t.add_argument("--protocol", choices=PROTOCOLS, default="paper",
+                   help="paper: Section 7.2.1 (noisy examples from the sinking set, random "
+                        "points from the centred range); grid: the teacher's shots as they "
+                        "are, random points over the whole range [paper]")
     t.add_argument("--quick", action="store_true",
                    help="3 repetitions and a coarser teacher: a check in about a minute")
     t.add_argument("--out", default="table1_out", help="output folder [table1_out]")
@@ -351,7 +355,7 @@ def _cmd_table1(a) -> int:
     table1_command(Table1Config(fields=tuple(a.field), repetitions=a.repetitions, seed=a.seed,
                                 out=a.out, workers=a.workers, dask=a.dask, quick=a.quick,
                                 demos=a.demos, figures=not a.no_figures,
-                                progress=not a.quiet))
+                                progress=not a.quiet, protocol=a.protocol))
     return 0
 
 

@@ -1,5 +1,5 @@
-"""``seds-casadi table1``: the protocol of :mod:`seds_casadi.minigolf.table1` run end to end,
-with Fig. 10 and 11.
+"""``seds-casadi table1``: a protocol of :mod:`seds_casadi.minigolf.table1` (the paper's by
+default) run end to end, with Fig. 10 and 11.
 
 Settings are a :class:`Table1Config`; progress and the table go to the ``logging`` logger of
 this module (the command line prints them).
@@ -17,11 +17,15 @@ import numpy as np
 from ..core._io import atomic_text
 from ..minigolf.hitting_data import HittingDataset
 from ..minigolf.parameters import make_model
+from ..minigolf.sinking import SinkingSet
 from ..minigolf.table1 import (
+    CENTRE_FRACTION,
+    PROTOCOLS,
     TABLE1_FIELDS,
     Table1Row,
     format_table1,
     run_table1,
+    training_indices,
     write_table1_csv,
 )
 from ._config import names_tuple, whole_number, with_overrides
@@ -58,6 +62,10 @@ class Table1Config:
         Write Fig. 10 and 11.
     progress : bool
         Progress bars (on stderr, only on a terminal).
+    protocol : {"paper", "grid"}
+        The protocol of :func:`~seds_casadi.minigolf.table1.run_table1`: the paper's (noisy
+        examples from the sinking set, random points from the centred range) or the grid
+        protocol this package ran before.
     """
 
     fields: tuple[str, ...] = TABLE1_FIELDS
@@ -70,8 +78,12 @@ class Table1Config:
     demos: str | None = None
     figures: bool = True
     progress: bool = True
+    protocol: str = "paper"
 
     def __post_init__(self) -> None:
+        if self.protocol not in PROTOCOLS:
+            raise ValueError(f"unknown protocol {self.protocol!r}; valid: "
+                             f"{', '.join(PROTOCOLS)}")
         object.__setattr__(self, "fields", names_tuple("field", self.fields))
         object.__setattr__(self, "repetitions",
                            whole_number("repetitions", self.repetitions, 1))
@@ -83,31 +95,46 @@ class Table1Config:
         return replace(self, repetitions=min(self.repetitions, 3)) if self.quick else self
 
 
-def fig10(field_name: str, ds: HittingDataset, n_train: int = 8, ax_row=None):
-    """Fig. 10: GPR and GMR fitted on the points around the centre of a data set along one
-    input dimension (the hole along a slider), over the input that varies most."""
+def fig10(field_name: str, ds: HittingDataset, n_train: int = 10, ax_row=None,
+          sinking: SinkingSet | None = None, seed: int = 0,
+          centre_fraction: float = CENTRE_FRACTION):
+    """Fig. 10: GPR and GMR (K = 2) with their two-standard-deviation bands, fitted on
+    ``n_train`` points drawn at random from the centred range of a data set along one input
+    dimension (the hole along a slider; black crosses), the rest in red, over the input that
+    varies.
+
+    With ``sinking`` the examples are one draw from the sinking set (Eq. 15, the ``"paper"``
+    protocol of :mod:`seds_casadi.minigolf.table1`), else the teacher's shots as they are.
+    """
     S, Y = ds.situations, ds.outputs
+    rng = np.random.default_rng(seed)
+    if sinking is not None:
+        Y = sinking.draw(rng)[:, :Y.shape[1]]
     column = int(np.argmax(np.ptp(S, axis=0)))
-    order = np.argsort(S[:, column], kind="stable")
-    n = len(ds)
-    lo = max(0, (n - n_train) // 2)
-    train = order[lo:min(n, lo + n_train)]
+    train = training_indices(S, n_train, "centred", rng, centre_fraction)
     models = {f"GPR ({field_name})": make_model("gpr").fit(S[train], Y[train]),
               f"GMR, K=2 ({field_name})": make_model("gmr", n_components=2).fit(S[train],
                                                                                 Y[train])}
     from .plotting import plot_regression_1d
 
     name = "sideways" if column == 1 else "ahead"
+    lo, hi = float(S[:, column].min()), float(S[:, column].max())
+    # the input range and a tenth beyond it on each side: the test situations' range
+    query = np.linspace(lo - 0.1 * (hi - lo), hi + 0.1 * (hi - lo), 300)
     return plot_regression_1d(S, Y[:, 0], train, models, ax_row=ax_row, column=column,
-                              xlabel=f"hole {name} of the ball, s_{'xy'[column]} [m]")
+                              xlabel=f"hole {name} of the ball, s_{'xy'[column]} [m]",
+                              x_query=query)
 
 
-def fig11(ds: HittingDataset, n_components: int = 3, ax_row=None):
-    """Fig. 11: the joint GMM (K=3) of an arctan data set, outputs and correlations."""
+def fig11(ds: HittingDataset, n_components: int = 3, ax_row=None,
+          sinking: SinkingSet | None = None, seed: int = 0):
+    """Fig. 11: the joint GMM (K=3) of an arctan data set, outputs and correlations (with
+    ``sinking``: fitted on one draw of the noisy examples, Eq. 15)."""
     from .plotting import plot_joint_gmm
 
-    m = make_model("gmr", n_components=n_components).fit(ds.situations, ds.outputs)
-    return plot_joint_gmm(m, ds.outputs, ax_row=ax_row)
+    Y = ds.outputs if sinking is None else sinking.draw(np.random.default_rng(seed))
+    m = make_model("gmr", n_components=n_components).fit(ds.situations, Y)
+    return plot_joint_gmm(m, Y, ax_row=ax_row)
 
 
 def _stroke(cfg: Table1Config):
@@ -144,29 +171,51 @@ def _teach(cfg: Table1Config, fields: list, stroke) -> dict:
     return datasets
 
 
-def _figures(datasets: dict, out: str) -> None:
+def _sinking_sets(datasets: dict, quick: bool = False) -> dict:
+    """The sinking set of each field's data set (the ``"paper"`` protocol's noise; ``quick``:
+    3 gains and a 0.05 deg scan instead of 5 and 0.02 deg)."""
+    from ..minigolf.sinking import sinking_set
+    from ..minigolf.teacher import Teacher
+
+    scan = {"n_gains": 3, "step_deg": 0.05} if quick else {}
+    out = {}
+    for name, (f, ds) in datasets.items():
+        t0 = time.perf_counter()
+        out[name] = sinking_set(Teacher(f, ds.stroke, ds.strategy), ds, **scan)
+        w = out[name].widths
+        _LOG.info("sinking set on %s: angle intervals %.2f deg wide (median; %.2f-%.2f; "
+                  "%.1f s)", name, float(np.nanmedian(w)), float(np.nanmin(w)),
+                  float(np.nanmax(w)), time.perf_counter() - t0)
+    return out
+
+
+def _figures(datasets: dict, out: str, sinking: dict | None = None, seed: int = 0) -> None:
     """Fig. 10 on a one-output data set along a slider (the double hill's if there), Fig. 11
-    on a two-output one."""
+    on a two-output one; with ``sinking`` (field name -> sinking set) on noisy examples."""
     from .plotting import pyplot, save_figure
 
     plt = pyplot()
     one = [(n, ds) for n, (f, ds) in datasets.items()
            if ds.outputs.shape[1] == 1 and f.situations.dim == 1]
-    two = [ds for _, ds in datasets.values() if ds.outputs.shape[1] == 2]
+    two = [(n, ds) for n, (_, ds) in datasets.items() if ds.outputs.shape[1] == 2]
+    sinking = sinking or {}
     if one:
         name, ds = next(((n, d) for n, d in one if n == "double_hill"), one[0])
         fig, axs = plt.subplots(1, 2, figsize=(10, 3.8), sharey=True)
-        fig10(name, ds, ax_row=axs)
-        fig.suptitle(f"Fig. 10: {name}, the hitting angle by GPR and GMR from 8 training "
-                     f"shots", fontsize=10)
+        fig10(name, ds, ax_row=axs, sinking=sinking.get(name), seed=seed)
+        what = ("noisy examples from the sinking set" if name in sinking
+                else "the teacher's shots")
+        fig.suptitle(f"Fig. 10: {name}, the hitting angle by GPR and GMR from 10 random "
+                     f"training points of the centred range ({what})", fontsize=10)
         fig.tight_layout()
         save_figure(fig, os.path.join(out, "fig10_gpr_gmr.png"))
     if two:
         fig = plt.figure(figsize=(13, 4.0))
         grid = fig.add_gridspec(1, 4, width_ratios=[1.4, 1, 1, 1], wspace=0.35)
         axs = [fig.add_subplot(grid[0, i]) for i in range(4)]
-        fig11(two[0], ax_row=axs)
-        fig.suptitle(f"Fig. 11: {two[0].field}, the joint GMM (K = 3) of the situation s and "
+        name, ds = two[0]
+        fig11(ds, ax_row=axs, sinking=sinking.get(name), seed=seed)
+        fig.suptitle(f"Fig. 11: {ds.field}, the joint GMM (K = 3) of the situation s and "
                      f"the hitting parameters (alpha [deg], kappa)", fontsize=10)
         save_figure(fig, os.path.join(out, "fig11_joint_gmm.png"))
 
@@ -196,17 +245,20 @@ def table1_command(config: Table1Config | None = None, **overrides) -> list[Tabl
     loaded = [load_field(f) for f in cfg.fields]  # bad names fail before any work
     os.makedirs(os.path.join(cfg.out, "datasets"), exist_ok=True)
     datasets = _teach(cfg, loaded, _stroke(cfg))
+    sinking = _sinking_sets(datasets, cfg.quick) if cfg.protocol == "paper" else None
     t2 = time.perf_counter()
     with open_executor(cfg.workers, cfg.dask) as ex:
-        means, runs = run_table1(datasets, cfg.repetitions, cfg.seed, ex, cfg.progress)
+        means, runs = run_table1(datasets, cfg.repetitions, cfg.seed, ex, cfg.progress,
+                                 protocol=cfg.protocol, sinking=sinking)
     text = format_table1(means)
     _LOG.info("%s", text)
-    _LOG.info("%d repetitions in %.1f s", cfg.repetitions, time.perf_counter() - t2)
+    _LOG.info("protocol %s, %d repetitions in %.1f s", cfg.protocol, cfg.repetitions,
+              time.perf_counter() - t2)
     write_table1_csv(means, os.path.join(cfg.out, "table1.csv"))
     write_table1_csv(runs, os.path.join(cfg.out, "table1_repetitions.csv"))
     atomic_text(os.path.join(cfg.out, "table1.txt"), text)
     if cfg.figures:
-        _figures(datasets, cfg.out)
+        _figures(datasets, cfg.out, sinking, cfg.seed)
     _LOG.info("wrote table1.csv, table1_repetitions.csv, table1.txt, datasets/%s in %s",
               " and Fig. 10 and 11" if cfg.figures else "", cfg.out)
     return means

@@ -1,6 +1,35 @@
 """The paper's Table 1: GPR against GMR for the hitting parameters on simulated fields.
 
-Protocol (paper Section 7.2.1), for each field and training-set kind:
+Two protocols, chosen by name (:data:`PROTOCOLS`): ``"paper"`` (the default) as Section 7.2.1
+describes it, and ``"grid"``, the protocol of this package before (issues 4 and 15).
+
+``"paper"`` (Section 7.2.1, Fig. 10, Eq. 15-16), for each field and training-set kind:
+
+1. The teacher's data set as in ``"grid"`` (20 situations along one input dimension, the hole
+   moved sideways along the far edge with the speed fixed, on rough flat and double hill; 56
+   over the ball's region at the minimal speed on arctan), and around each of its shots the
+   **sinking set** (:mod:`seds_casadi.minigolf.sinking`). Each repetition draws its examples
+   from the sinking set: the taught parameters plus the noise of Eq. 15 ("the hole being larger
+   than the ball"), not the centre of the range.
+2. Training sets: on a one-dimensional situation space, 5 and 10 points **at random from a
+   range around the centre of the input range** (Fig. 10's black crosses; the middle
+   :data:`CENTRE_FRACTION` of it: see below) and 10 equally spaced over the whole range; on
+   arctan 16 random and 28 equally spaced over the whole region (the text names the centred
+   range for the "initial experiment" on the flat and double hill fields only).
+3. RMSE on the remaining examples of the data set (noisy too: the paper's validation data are
+   its data set), success on 30 random situations of the whole declared range, played on the
+   ball model; models, counts and repetitions as below.
+
+The width of the centred range is not given in the text; :data:`CENTRE_FRACTION` = 0.6 (the
+middle 12 of the 20 points) follows from two of its statements: "10 random training points"
+are drawn from that range, so it must hold more than 10 of the 20 points (more than half the
+range; 0.6 is the narrowest width on the 20-point line that leaves the 10-point draw a choice
+of more than one pair to leave out), and GPR, which "outputs zero far from the training data",
+sinks 0.54-0.59 with random points on the rough flat field where equally spaced ones sink 0.96:
+about the fraction of the range the training points cover. With 0.6 the 10-point draw leaves
+out 2 of 12 centred points (66 training sets), not 1 of 11 or none of 10.
+
+``"grid"``, for each field and training-set kind:
 
 1. The teacher's data set (:func:`seds_casadi.minigolf.teacher.collect_dataset`) over the
    situations the field declares: 20 along a one-dimensional situation space (the rough flat
@@ -38,10 +67,20 @@ from .ball import simulate_shots
 from .fields import Field
 from .hitting_data import HittingDataset
 from .parameters import make_model
+from .sinking import SinkingSet, sinking_set
+from .teacher import Teacher
 
-__all__ = ["TRAINING_SETS", "MODELS_BY_OUTPUTS", "PAPER_TABLE1", "TABLE1_FIELDS", "CSV_COLUMNS",
+__all__ = ["TRAINING_SETS", "PAPER_TRAINING_SETS", "PROTOCOLS", "CENTRE_FRACTION",
+           "MODELS_BY_OUTPUTS", "PAPER_TABLE1", "TABLE1_FIELDS", "CSV_COLUMNS",
            "run_table1", "format_table1", "write_table1_csv", "training_indices",
-           "Table1Row", "protocol"]
+           "Table1Row", "protocol", "training_sets", "centred_indices", "paper_conclusions",
+           "rows_within"]
+
+#: The protocols of :func:`run_table1` (module docstring)
+PROTOCOLS = ("paper", "grid")
+#: ``"paper"``: the random training points of a one-dimensional situation space come from the
+#: middle of the input range of this width (a fraction of the range; module docstring)
+CENTRE_FRACTION = 0.6
 
 TABLE1_FIELDS = ("rough_flat", "double_hill", "arctan")
 #: Training sets (label, size, kind) by the dimension of the field's situation space: one
@@ -52,16 +91,26 @@ TRAINING_SETS = {
         ("10 equally spaced", 10, "spaced")],
     2: [("16 random", 16, "random"), ("28 equally spaced", 28, "spaced")],
 }
+#: ``"paper"``: as :data:`TRAINING_SETS`, the random points of the one-dimensional situation
+#: spaces drawn from the centred range (kind ``"centred"``)
+PAPER_TRAINING_SETS = {
+    1: [("5 random", 5, "centred"), ("10 random", 10, "centred"),
+        ("10 equally spaced", 10, "spaced")],
+    2: TRAINING_SETS[2],
+}
 #: Models compared, by the number of outputs (alpha; or alpha and kappa)
 MODELS_BY_OUTPUTS = {1: ("gpr", "gmr"), 2: ("gpr", "sep_gmr", "gmr")}
 #: Gaussians of the GMMs, by the number of outputs
 N_COMPONENTS = {1: 2, 2: 3}
 N_TEST_SITUATIONS = 30
 #: columns of ``table1.csv``: the RMSE of the hitting angle [deg] and of the hitting speed
-#: kappa v* [m/s] (empty without a speed output), the success rate (a fraction) and the model's
-#: number of parameters
+#: kappa v* [m/s] (empty without a speed output), the success rate (a fraction), the model's
+#: number of parameters, the repetitions averaged, and the spread across them: the standard
+#: deviation and the 10 % and 90 % quantiles of the success rate, the standard deviation of
+#: the angle's RMSE (one repetition's row: 1 and empty)
 CSV_COLUMNS = ("field", "training", "model", "rmse_angle_deg", "rmse_speed_mps", "success_rate",
-               "n_params")
+               "n_params", "repetitions", "success_std", "success_q10", "success_q90",
+               "rmse_angle_std")
 
 #: The paper's Table 1: (field, training, model) -> (rmse_angle [deg], rmse_speed, success, #)
 PAPER_TABLE1 = {
@@ -92,7 +141,8 @@ class Table1Row:
 
     ``rmse_angle`` is in degrees, ``rmse_speed`` (of the hitting speed kappa v*) in m/s (NaN
     when the models predict the angle only), ``success_rate`` a fraction, ``n_params`` the
-    model's number of parameters.
+    model's number of parameters; the spread across the repetitions (NaN for one repetition's
+    row): ``success_std``, ``success_q10``, ``success_q90`` and ``rmse_angle_std``.
     """
 
     field: str
@@ -103,19 +153,49 @@ class Table1Row:
     success_rate: float
     n_params: int
     repetitions: int = 1
+    success_std: float = np.nan
+    success_q10: float = np.nan
+    success_q90: float = np.nan
+    rmse_angle_std: float = np.nan
+
+
+def centred_indices(situations: np.ndarray, fraction: float = CENTRE_FRACTION) -> np.ndarray:
+    """Indices of the situations in the middle ``fraction`` of the input range: in every input
+    that varies, within ``fraction / 2`` of the range's width from its midpoint (Fig. 10's
+    black crosses come from such a range)."""
+    S = np.atleast_2d(np.asarray(situations, float))
+    if not (np.isfinite(fraction) and 0 < fraction <= 1):
+        raise ValueError(f"the centred range must be a fraction in (0, 1], got {fraction}")
+    lo, hi = S.min(axis=0), S.max(axis=0)
+    span = hi - lo
+    varies = span > 1e-9 * max(1.0, float(span.max()))
+    off = np.abs(S - 0.5 * (lo + hi))[:, varies]
+    # a relative tolerance: points on the range's edge by construction stay inside
+    keep = np.all(off <= (0.5 * fraction * span[varies]) * (1 + 1e-9) + 1e-12, axis=1)
+    return np.flatnonzero(keep)
 
 
 def training_indices(situations: np.ndarray, size: int, kind: str,
-                     rng: np.random.Generator) -> np.ndarray:
-    """Indices of a training set: ``"random"`` or ``"spaced"`` (module docstring)."""
+                     rng: np.random.Generator,
+                     centre_fraction: float = CENTRE_FRACTION) -> np.ndarray:
+    """Indices of a training set: ``"random"`` (over the whole data set), ``"centred"`` (at
+    random from the middle ``centre_fraction`` of the input range, :func:`centred_indices`) or
+    ``"spaced"`` (module docstring)."""
     n = len(situations)
     if not 1 <= size < n:
         raise ValueError(f"a training set of {size} from {n} situations leaves no test points; "
                          f"use fewer training points or a larger data set")
     if kind == "random":
         return np.sort(rng.choice(n, size, replace=False))
+    if kind == "centred":
+        pool = centred_indices(situations, centre_fraction)
+        if len(pool) < size:
+            raise ValueError(f"the middle {centre_fraction:g} of the input range holds "
+                             f"{len(pool)} of {n} situations, too few for {size} training "
+                             f"points; widen the centred range or use fewer points")
+        return np.sort(rng.choice(pool, size, replace=False))
     if kind != "spaced":
-        raise ValueError(f"training kind must be 'random' or 'spaced', got {kind!r}")
+        raise ValueError(f"training kind must be 'random', 'centred' or 'spaced', got {kind!r}")
     centred = situations - situations.mean(axis=0)
     _, sv, vt = np.linalg.svd(centred, full_matrices=False)
     if sv[-1] <= 1e-9 * max(1.0, sv[0]):
@@ -164,6 +244,10 @@ def _repetition_body(task: dict) -> list[Table1Row]:
     ds: HittingDataset = task["dataset"]
     rng = np.random.default_rng(task["seed"])
     S, Y = ds.situations, ds.outputs
+    sinking: SinkingSet | None = task.get("sinking")
+    if sinking is not None:
+        # the paper's noisy examples (Eq. 15): this repetition's draw from the sinking set
+        Y = sinking.draw(rng, task["noise_spread"])[:, :Y.shape[1]]
     idx = training_indices(S, task["size"], task["kind"], rng)
     test = np.setdiff1d(np.arange(len(ds)), idx)
     balls, holes = field.situations.sample(N_TEST_SITUATIONS, rng)
@@ -191,26 +275,53 @@ def _repetition_body(task: dict) -> list[Table1Row]:
 
 
 def protocol(field: Field) -> list[tuple[str, int, str]]:
-    """The training sets (label, size, kind) of a field: :data:`TRAINING_SETS` for the
-    dimension of the situations it declares."""
+    """The training sets (label, size, kind) of a field under the ``"grid"`` protocol:
+    :data:`TRAINING_SETS` for the dimension of the situations it declares."""
     return TRAINING_SETS[min(max(field.situations.dim, 1), 2)]
 
 
+def training_sets(field: Field, name: str = "paper") -> list[tuple[str, int, str]]:
+    """The training sets (label, size, kind) of a field under the protocol ``name``
+    (:data:`PROTOCOLS`): :data:`PAPER_TRAINING_SETS` or :data:`TRAINING_SETS`."""
+    _check_protocol(name)
+    if name == "grid":
+        return protocol(field)
+    return PAPER_TRAINING_SETS[min(max(field.situations.dim, 1), 2)]
+
+
+def _check_protocol(name: str) -> None:
+    if name not in PROTOCOLS:
+        raise ValueError(f"unknown Table 1 protocol {name!r}; valid: {', '.join(PROTOCOLS)}")
+
+
 def run_table1(datasets: dict[str, tuple[Field, HittingDataset]], repetitions: int = 100,
-               seed: int = 0, executor=None, progress: bool = False
+               seed: int = 0, executor=None, progress: bool = False, protocol: str = "paper",
+               sinking: dict[str, SinkingSet] | None = None, noise_spread: float = 1.0
                ) -> tuple[list[Table1Row], list[Table1Row]]:
-    """Run the protocol (module docstring).
+    """Run a protocol (module docstring).
 
     Parameters
     ----------
     datasets : dict
         Field name -> (field, data set); the field's situations pick the training sets
-        (:func:`protocol`), the data set's outputs the models (:data:`MODELS_BY_OUTPUTS`).
+        (:func:`training_sets`), the data set's outputs the models
+        (:data:`MODELS_BY_OUTPUTS`).
     repetitions : int
     seed : int
     executor : concurrent.futures.Executor, optional
         Where the repetitions run (default: this process).
     progress : bool
+    protocol : {"paper", "grid"}, default "paper"
+        ``"paper"``: noisy examples from the sinking set (Eq. 15) and random points from the
+        centred range; ``"grid"``: the teacher's shots as they are and random points from the
+        whole data set.
+    sinking : dict, optional
+        ``"paper"``: field name -> the sinking set of its data set
+        (:func:`~seds_casadi.minigolf.sinking.sinking_set`); measured here when left out.
+    noise_spread : float, default 1
+        ``"paper"``: the examples are drawn uniformly over this middle fraction of each
+        sinking interval (1: anywhere in it, the default; 0: its middle, no noise;
+        :meth:`~seds_casadi.minigolf.sinking.SinkingSet.draw`).
 
     Returns
     -------
@@ -221,18 +332,33 @@ def run_table1(datasets: dict[str, tuple[Field, HittingDataset]], repetitions: i
     """
     if int(repetitions) < 1:
         raise ValueError(f"repetitions must be at least 1, got {repetitions}")
+    _check_protocol(protocol)
+    if not (np.isfinite(noise_spread) and 0 <= noise_spread <= 1):
+        raise ValueError(f"noise_spread must be in [0, 1], got {noise_spread}")
+    sinking = dict(sinking or {})
     tasks = []
     for fname, (field, ds) in datasets.items():
-        n_out = ds.outputs.shape[1]
-        for ti, (label, size, kind) in enumerate(protocol(field)):
+        for label, size, _ in training_sets(field, protocol):
             if size >= len(ds):
                 raise ValueError(f"{fname}: the data set has {len(ds)} situations, too few for "
                                  f"'{label}' (the teacher dropped {ds.dropped})")
+    for fname, (field, ds) in datasets.items():
+        n_out = ds.outputs.shape[1]
+        noise = None
+        if protocol == "paper":
+            noise = sinking.get(fname)
+            if noise is None:
+                noise = sinking_set(Teacher(field, ds.stroke, ds.strategy), ds)
+            if len(noise) != len(ds):
+                raise ValueError(f"{fname}: the sinking set has {len(noise)} situations, the "
+                                 f"data set {len(ds)}")
+        for ti, (label, size, kind) in enumerate(training_sets(field, protocol)):
             for rep in range(int(repetitions)):
                 tasks.append({"field": fname, "field_spec": field.spec, "dataset": ds,
                               "training": label, "size": size, "kind": kind, "rep": rep,
                               "models": MODELS_BY_OUTPUTS[n_out],
-                              "n_components": N_COMPONENTS[n_out],
+                              "n_components": N_COMPONENTS[n_out], "sinking": noise,
+                              "noise_spread": float(noise_spread),
                               "seed": [int(seed), zlib.crc32(fname.encode()), ti, rep]})
     results = (executor.map(_repetition, tasks) if executor is not None
                else map(_repetition, tasks))
@@ -242,38 +368,103 @@ def run_table1(datasets: dict[str, tuple[Field, HittingDataset]], repetitions: i
     means = []
     for key in dict.fromkeys((r.field, r.training, r.model) for r in runs):
         rs = [r for r in runs if (r.field, r.training, r.model) == key]
-        means.append(Table1Row(*key, float(np.mean([r.rmse_angle for r in rs])),
+        success = np.array([r.success_rate for r in rs])
+        angle = np.array([r.rmse_angle for r in rs])
+        means.append(Table1Row(*key, float(angle.mean()),
                                float(np.mean([r.rmse_speed for r in rs])),
-                               float(np.mean([r.success_rate for r in rs])),
-                               rs[0].n_params, len(rs)))
+                               float(success.mean()), rs[0].n_params, len(rs),
+                               float(success.std(ddof=1)) if len(rs) > 1 else np.nan,
+                               float(np.quantile(success, 0.1)),
+                               float(np.quantile(success, 0.9)),
+                               float(angle.std(ddof=1)) if len(rs) > 1 else np.nan))
     return means, runs
+
+
+def paper_conclusions(rows: list[Table1Row]) -> dict[str, bool | None]:
+    """The paper's conclusions from Table 1 (Section 7.2.1), checked on our means.
+
+    Returns
+    -------
+    dict
+        Conclusion -> whether it holds (None when the rows it needs are missing):
+        ``"random: GMR >= GPR"`` (rough flat and double hill, 5 and 10 random points),
+        ``"spaced: GPR >= GMR"`` (every field's equally spaced rows),
+        ``"joint GMM >= separate GMMs"`` (success, every training set with both, and fewer
+        parameters).
+    """
+    by = {(r.field, r.training, r.model): r for r in rows}
+
+    def compare(pairs):
+        pairs = [(by[a], by[b]) for a, b in pairs if a in by and b in by]
+        return None if not pairs else all(x.success_rate >= y.success_rate for x, y in pairs)
+
+    fields = dict.fromkeys(r.field for r in rows)
+    random_pairs = [((f, t, "gmr"), (f, t, "gpr")) for f in ("rough_flat", "double_hill")
+                    for t in ("5 random", "10 random")]
+    spaced_pairs = [((f, t, "gpr"), (f, t, "gmr")) for f in fields
+                    for t in dict.fromkeys(r.training for r in rows if r.field == f)
+                    if "spaced" in t]
+    joint_pairs = [((r.field, r.training, "gmr"), (r.field, r.training, "sep_gmr"))
+                   for r in rows if r.model == "sep_gmr"]
+    joint = compare(joint_pairs)
+    if joint is not None:
+        joint = joint and all(by[a].n_params < by[b].n_params for a, b in joint_pairs)
+    return {"random: GMR >= GPR": compare(random_pairs),
+            "spaced: GPR >= GMR": compare(spaced_pairs),
+            "joint GMM >= separate GMMs": joint}
 
 
 def _fmt(v, spec=".2f"):
     return "-" if v is None or (isinstance(v, float) and np.isnan(v)) else format(v, spec)
 
 
+def rows_within(rows: list[Table1Row], tolerance: float = 0.1) -> tuple[int, int]:
+    """(rows whose success rate is within ``tolerance`` of the paper's, rows the paper has)."""
+    paired = [(r, PAPER_TABLE1[(r.field, r.training, r.model)]) for r in rows
+              if (r.field, r.training, r.model) in PAPER_TABLE1]
+    close = sum(abs(r.success_rate - p[2]) <= tolerance + 1e-9 for r, p in paired)
+    return int(close), len(paired)
+
+
 def format_table1(rows: list[Table1Row]) -> str:
-    """Text table of our numbers beside the paper's."""
+    """Text table of our numbers beside the paper's, with the spread of the success rate
+    across repetitions (standard deviation), the rows within 0.1 of the paper's success and
+    the paper's conclusions checked (:func:`paper_conclusions`)."""
     head = (f"{'field':<12} {'training':<18} {'model':<8} {'e_alpha':>7} {'paper':>6} "
-            f"{'e_v':>6} {'paper':>6} {'success':>7} {'paper':>6} {'#':>4} {'paper':>5}")
+            f"{'e_v':>6} {'paper':>6} {'success':>7} {'sd':>5} {'paper':>6} {'#':>4} "
+            f"{'paper':>5}")
     lines = [head, "-" * len(head)]
     for r in rows:
         p = PAPER_TABLE1.get((r.field, r.training, r.model), (np.nan,) * 4)
         lines.append(f"{r.field:<12} {r.training:<18} {r.model:<8} {_fmt(r.rmse_angle):>7} "
                      f"{_fmt(p[0]):>6} {_fmt(r.rmse_speed, '.3f'):>6} {_fmt(p[1]):>6} "
-                     f"{_fmt(r.success_rate):>7} {_fmt(p[2]):>6} {r.n_params:>4d} "
-                     f"{_fmt(p[3], 'd') if not np.isnan(p[3]) else '-':>5}")
+                     f"{_fmt(r.success_rate):>7} {_fmt(r.success_std):>5} {_fmt(p[2]):>6} "
+                     f"{r.n_params:>4d} {_fmt(p[3], 'd') if not np.isnan(p[3]) else '-':>5}")
     lines.append("e_alpha: RMSE of the hitting angle [deg]; e_v: RMSE of the hitting speed "
-                 "[m/s]; success: fraction of 30 random situations sunk; #: parameters.")
+                 "[m/s]; success: fraction of 30 random situations sunk (sd: its standard "
+                 "deviation across repetitions); #: parameters.")
+    close, total = rows_within(rows)
+    if total:
+        lines.append(f"{close} of {total} rows within 0.1 of the paper's success.")
+    checks = [f"{k}: {'holds' if v else 'does not hold'}"
+              for k, v in paper_conclusions(rows).items() if v is not None]
+    if checks:
+        lines.append("The paper's conclusions: " + "; ".join(checks) + ".")
     return "\n".join(lines) + "\n"
 
 
 def write_table1_csv(rows: list[Table1Row], path: str | os.PathLike) -> None:
     """Write the rows with the columns :data:`CSV_COLUMNS` (``field, training, model,
-    rmse_angle_deg, rmse_speed_mps, success_rate, n_params``; atomically: a partial file never
-    appears under the final name; no speed: empty)."""
+    rmse_angle_deg, rmse_speed_mps, success_rate, n_params, repetitions, success_std,
+    success_q10, success_q90, rmse_angle_std``; atomically: a partial file never appears under
+    the final name; a value that does not apply, as the speed of an angle-only model or the
+    spread of one repetition: empty)."""
+
+    def cell(v):
+        return "" if isinstance(v, float) and np.isnan(v) else v
+
     atomic_csv(path, CSV_COLUMNS,
-               ([r.field, r.training, r.model, r.rmse_angle,
-                 "" if np.isnan(r.rmse_speed) else r.rmse_speed, r.success_rate, r.n_params]
+               ([r.field, r.training, r.model, r.rmse_angle, cell(r.rmse_speed),
+                 r.success_rate, r.n_params, r.repetitions, cell(r.success_std),
+                 cell(r.success_q10), cell(r.success_q90), cell(r.rmse_angle_std)]
                 for r in rows))
