@@ -179,6 +179,8 @@ def test_the_paper_protocol_runs_with_the_spread_and_differs_from_the_grid(doubl
         run_table1(data, repetitions=1, protocol="table")
     with pytest.raises(ValueError, match="noise_spread"):
         run_table1(data, repetitions=1, noise_spread=2.0)
+    with pytest.raises(ValueError, match="holds 6 situations, too few for '10 random'"):
+        run_table1(data, repetitions=1, sinking={"double_hill": sink}, centre_fraction=0.3)
     with pytest.raises(ValueError, match="sinking set has 3"):
         small = SinkingSet(sink.gains[:3], sink.lower[:3], sink.upper[:3], True)
         run_table1(data, repetitions=1, sinking={"double_hill": small})

@@ -248,7 +248,7 @@ def _repetition_body(task: dict) -> list[Table1Row]:
     if sinking is not None:
         # the paper's noisy examples (Eq. 15): this repetition's draw from the sinking set
         Y = sinking.draw(rng, task["noise_spread"])[:, :Y.shape[1]]
-    idx = training_indices(S, task["size"], task["kind"], rng)
+    idx = training_indices(S, task["size"], task["kind"], rng, task["centre_fraction"])
     test = np.setdiff1d(np.arange(len(ds)), idx)
     balls, holes = field.situations.sample(N_TEST_SITUATIONS, rng)
     rows = []
@@ -296,7 +296,8 @@ def _check_protocol(name: str) -> None:
 
 def run_table1(datasets: dict[str, tuple[Field, HittingDataset]], repetitions: int = 100,
                seed: int = 0, executor=None, progress: bool = False, protocol: str = "paper",
-               sinking: dict[str, SinkingSet] | None = None, noise_spread: float = 1.0
+               sinking: dict[str, SinkingSet] | None = None, noise_spread: float = 1.0,
+               centre_fraction: float = CENTRE_FRACTION
                ) -> tuple[list[Table1Row], list[Table1Row]]:
     """Run a protocol (module docstring).
 
@@ -322,6 +323,9 @@ def run_table1(datasets: dict[str, tuple[Field, HittingDataset]], repetitions: i
         ``"paper"``: the examples are drawn uniformly over this middle fraction of each
         sinking interval (1: anywhere in it, the default; 0: its middle, no noise;
         :meth:`~seds_casadi.minigolf.sinking.SinkingSet.draw`).
+    centre_fraction : float, default :data:`CENTRE_FRACTION`
+        ``"paper"``: the width of the centred range the random training points of a
+        one-dimensional situation space come from (a fraction of the input range).
 
     Returns
     -------
@@ -335,13 +339,20 @@ def run_table1(datasets: dict[str, tuple[Field, HittingDataset]], repetitions: i
     _check_protocol(protocol)
     if not (np.isfinite(noise_spread) and 0 <= noise_spread <= 1):
         raise ValueError(f"noise_spread must be in [0, 1], got {noise_spread}")
+    if not (np.isfinite(centre_fraction) and 0 < centre_fraction <= 1):
+        raise ValueError(f"centre_fraction must be in (0, 1], got {centre_fraction}")
     sinking = dict(sinking or {})
     tasks = []
     for fname, (field, ds) in datasets.items():
-        for label, size, _ in training_sets(field, protocol):
+        for label, size, kind in training_sets(field, protocol):
             if size >= len(ds):
                 raise ValueError(f"{fname}: the data set has {len(ds)} situations, too few for "
                                  f"'{label}' (the teacher dropped {ds.dropped})")
+            pool = len(centred_indices(ds.situations, centre_fraction))
+            if kind == "centred" and pool < size:
+                raise ValueError(f"{fname}: the middle {centre_fraction:g} of the input range "
+                                 f"holds {pool} situations, too few for '{label}'; widen "
+                                 f"centre_fraction")
     for fname, (field, ds) in datasets.items():
         n_out = ds.outputs.shape[1]
         noise = None
@@ -359,6 +370,7 @@ def run_table1(datasets: dict[str, tuple[Field, HittingDataset]], repetitions: i
                               "models": MODELS_BY_OUTPUTS[n_out],
                               "n_components": N_COMPONENTS[n_out], "sinking": noise,
                               "noise_spread": float(noise_spread),
+                              "centre_fraction": float(centre_fraction),
                               "seed": [int(seed), zlib.crc32(fname.encode()), ti, rep]})
     results = (executor.map(_repetition, tasks) if executor is not None
                else map(_repetition, tasks))

@@ -1,0 +1,83 @@
+"""Table 1 under the paper's protocol and its variants: how the rows move with the choices the
+paper leaves open (issue 33).
+
+Learns the hitting motion, lets the teacher collect its data sets and measures their sinking
+sets once, then runs :func:`seds_casadi.minigolf.table1.run_table1` for each variant and
+prints, per variant, the success rates beside the paper's, the rows within 0.1 and the paper's
+conclusions:
+
+* ``grid``: the protocol before issue 33 (the teacher's shots as they are, random points over
+  the whole range);
+* ``paper``: the default (noise anywhere in the sinking set, centred range 0.6);
+* ``noise 0.5`` / ``noise 0``: the examples drawn from the middle half of each sinking
+  interval / its middle (no noise);
+* ``centre 0.7`` / ``centre 1``: the random training points from a wider centred range / the
+  whole range.
+
+python benchmarks/table1_sensitivity.py [--repetitions 30] [--workers 1]
+"""
+
+import argparse
+import time
+
+from seds_casadi.app.executors import open_executor
+from seds_casadi.minigolf import Stroke, collect_dataset
+from seds_casadi.minigolf.fields import load_field
+from seds_casadi.minigolf.sinking import sinking_set
+from seds_casadi.minigolf.table1 import (
+    PAPER_TABLE1,
+    TABLE1_FIELDS,
+    paper_conclusions,
+    rows_within,
+    run_table1,
+)
+from seds_casadi.minigolf.teacher import Teacher
+from seds_casadi.motion.hitting import HittingMotionLearner
+from seds_casadi.motion.putting_demos import load_hitting_demos
+
+VARIANTS = {
+    "grid": {"protocol": "grid"},
+    "paper": {},
+    "noise 0.5": {"noise_spread": 0.5},
+    "noise 0": {"noise_spread": 0.0},
+    "centre 0.7": {"centre_fraction": 0.7},
+    "centre 1": {"centre_fraction": 1.0},
+}
+
+ap = argparse.ArgumentParser()
+ap.add_argument("--repetitions", type=int, default=30)
+ap.add_argument("--workers", type=int, default=1)
+args = ap.parse_args()
+
+stroke = Stroke.from_motion(HittingMotionLearner(n_components=3).fit(load_hitting_demos())
+                            .motion_)
+datasets, sinking = {}, {}
+for name in TABLE1_FIELDS:
+    f = load_field(name)
+    ds = collect_dataset(f, stroke)
+    datasets[name] = (f, ds)
+    sinking[name] = sinking_set(Teacher(f, stroke), ds)
+
+results = {}
+with open_executor(args.workers) as ex:
+    for label, kw in VARIANTS.items():
+        t0 = time.perf_counter()
+        means, _ = run_table1(datasets, args.repetitions, 0, ex, sinking=sinking, **kw)
+        results[label] = means
+        print(f"{label}: {time.perf_counter() - t0:.0f} s", flush=True)
+
+keys = [(r.field, r.training, r.model) for r in results["paper"]]
+print(f"\nsuccess over {args.repetitions} repetitions (paper's in the last column)")
+print(f"{'field':<12} {'training':<18} {'model':<8} "
+      + " ".join(f"{v:>10}" for v in VARIANTS) + f" {'paper':>6}")
+for key in keys:
+    row = {v: next(r for r in results[v] if (r.field, r.training, r.model) == key)
+           for v in VARIANTS}
+    print(f"{key[0]:<12} {key[1]:<18} {key[2]:<8} "
+          + " ".join(f"{row[v].success_rate:>10.2f}" for v in VARIANTS)
+          + f" {PAPER_TABLE1[key][2]:>6.2f}")
+print(f"{'within 0.1':<40} "
+      + " ".join(f"{'{}/{}'.format(*rows_within(results[v])):>10}" for v in VARIANTS))
+for c in paper_conclusions(results["paper"]):
+    print(f"{c:<40} " + " ".join(
+        f"{('holds' if paper_conclusions(results[v])[c] else 'no'):>10}" for v in VARIANTS))
