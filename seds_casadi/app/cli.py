@@ -243,7 +243,7 @@ def _add_play(sub, quiet) -> None:
                                     "play a round of shots with the robot on the field's ball "
                                     "model, a few checked in exudyn.")
     pl.add_argument("--robot", default="wam", help=_robot_help())
-    pl.add_argument("--field", default="arctan", help=_field_help("arctan"))
+    pl.add_argument("--field", default=None, help=_field_help("arctan"))
     pl.add_argument("--demos", default=None, help="hitting demonstrations (.npz/.csv) [shipped]")
     pl.add_argument("--learner", nargs="+", default=["gpr", "gmr"],
                     choices=["gpr", "gmr", "sep_gmr"], help="hitting-parameter learners [gpr gmr]")
@@ -274,6 +274,14 @@ def _add_play(sub, quiet) -> None:
     pl.add_argument("--quick", action="store_true",
                     help="3 situations, a coarse teacher, 1 exudyn check (about 15 s after "
                          "the first run's compilation)")
+    pl.add_argument("--world", default=None, metavar="WORLD",
+                    help="play the shots on a world whose green differs from --field's (a "
+                         "field name or .json file of the same course, or 'exudyn': the "
+                         "multibody model); the robot is taught on --field only [the field]")
+    pl.add_argument("--adapt", type=int, default=0, metavar="N",
+                    help="adaptation shots on the world before the round: the robot estimates "
+                         "the green from them and corrects its hitting parameters; the round "
+                         "is played before and after the correction [0]")
     pl.add_argument("--out", default="play_out", help="output folder [play_out]")
 
 
@@ -370,7 +378,13 @@ def _cmd_validate(a) -> int:
 def _cmd_play(a) -> int:
     from .play import PlayConfig, play
 
-    play(PlayConfig(robot=a.robot, field=a.field, demos=a.demos, learners=tuple(a.learner),
+    if a.world is not None and a.field is None:
+        raise ValueError("--world needs --field: the field the robot is taught on (the world "
+                         "is where its shots are played)")
+    if a.adapt < 0:
+        raise ValueError(f"--adapt must be a number of shots >= 0, got {a.adapt}")
+    play(PlayConfig(robot=a.robot, field=a.field or "arctan", demos=a.demos,
+                    learners=tuple(a.learner), world=a.world, adapt=a.adapt,
                     shots=a.shots, seed=a.seed, out=a.out, models=a.models, quick=a.quick,
                     validate_shots=a.validate, workers=a.workers, dask=a.dask,
                     train_size=a.train_size, strategies=a.strategies, replay=a.replay,

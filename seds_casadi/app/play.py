@@ -39,6 +39,7 @@ from threadpoolctl import threadpool_limits
 
 from ..core._io import atomic_csv, atomic_text
 from ..core.demo_files import load_demonstrations
+from ..game.adapt import World, adapt
 from ..game.launch import calibrate_launch
 from ..game.reach import check_reach, check_swing_accuracy, fastest_gain
 from ..game.scene import Scene
@@ -58,7 +59,7 @@ from ..robots.models import load_robot, robot_names
 from ._config import names_tuple, whole_number, with_overrides
 from .executors import InlineExecutor, open_executor
 from .outdir import path_under
-from .play_figures import play_figures, strategy_figure
+from .play_figures import adaptation_figure, play_figures, strategy_figure
 from .replay import write_replay
 from .shot_table import SHOT_COLUMNS, shot_row
 from .teacher_cache import cached_dataset
@@ -113,6 +114,14 @@ class PlayConfig:
     replay : int
         Replay the first learner's first ``replay`` shots (:mod:`seds_casadi.app.replay`):
         ``replay.html`` and a GIF per shot in ``out`` (0: none).
+    world : str or None
+        Where the shots are really played (:class:`~seds_casadi.game.adapt.World`): a field
+        name or ``.json`` file of the same course whose green differs, or ``"exudyn"`` (the
+        field in exudyn's multibody model); the robot is taught on ``field`` only. None: the
+        field itself.
+    adapt : int
+        Adaptation shots on the world before the round (:func:`~seds_casadi.game.adapt.adapt`):
+        the round is played with the taught models and again with the corrected ones.
     """
 
     robot: str = "wam"
@@ -132,6 +141,8 @@ class PlayConfig:
     strategies: str | int | None = None
     replay: int = 0
     cache: bool = True
+    world: str | None = None
+    adapt: int = 0
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "replay", whole_number("replay", self.replay, 0))
@@ -142,6 +153,12 @@ class PlayConfig:
                            whole_number("validate_shots", self.validate_shots, 0))
         object.__setattr__(self, "workers", whole_number("workers", self.workers, 1))
         object.__setattr__(self, "seed", whole_number("seed", self.seed, 0))
+        object.__setattr__(self, "adapt", whole_number("adapt", self.adapt, 0))
+        if self.world is not None and not str(self.world).strip():
+            raise ValueError("world must be a field name, a .json field file or 'exudyn'")
+        if self.adapt and self.strategies is not None:
+            raise ValueError("adapt corrects the model of the teacher's one strategy; leave out "
+                             "strategies")
         if self.train_size is not None:
             object.__setattr__(self, "train_size", whole_number("train_size", self.train_size,
                                                                 2))
@@ -300,13 +317,14 @@ def _round_shots(data, fitted: dict, balls, holes) -> list[Shot]:
     return shots
 
 
-def _play_round(cfg: PlayConfig, scene: Scene, shots: list[Shot], ex) -> list[dict]:
+def _play_round(cfg: PlayConfig, scene: Scene, shots: list[Shot], ex,
+                engine: str = "ball") -> list[dict]:
     """Step 4: the shots on this process, local workers or Dask (each worker loads the scene
     once); rows in the shots' order."""
-    _LOG.info("playing %d shots ...", len(shots))
+    _LOG.info("playing %d shots%s ...", len(shots), "" if engine == "ball" else f" ({engine})")
     # in this process the scene in memory plays them; workers load it from its spec
     here = isinstance(ex, InlineExecutor)
-    results = play_round(scene, shots, executor=None if here else ex,
+    results = play_round(scene, shots, engine=engine, executor=None if here else ex,
                          progress=lambda it: progress_bar(
                              it, cfg.progress, desc=f"playing {len(shots)} shots",
                              unit="batch of 4"))
@@ -323,13 +341,29 @@ def _check_in_exudyn(cfg: PlayConfig, scene: Scene, shots: list[Shot],
         row["sunk_exudyn"] = play_shot(scene, shot, engine="exudyn").sunk
 
 
+def _rates(rows: list[dict], learners) -> dict:
+    return {m: float(np.mean([r["sunk"] for r in rows if r["method"] == m])) for m in learners}
+
+
 def _summary(cfg: PlayConfig, fld, rows: list[dict], n_situations: int, times: dict,
-             started: float | None = None):
+             started: float | None = None, world: World | None = None,
+             adaptations: dict | None = None, before: list[dict] | None = None):
     """Success per learner, agreement with exudyn and the time per stage, as text."""
-    rates = {m: float(np.mean([r["sunk"] for r in rows if r["method"] == m]))
-             for m in cfg.learners}
+    rates = _rates(rows, cfg.learners)
     checked = [r for r in rows if r["sunk_exudyn"] != ""]
-    lines = [f"played {n_situations} situations on {fld.name} with the {cfg.robot}"]
+    where = fld.name if world is None or world.field is fld and world.engine == "ball" else (
+        f"the world {world.label} (taught on {fld.name})")
+    lines = [f"played {n_situations} situations on {where} with the {cfg.robot}"]
+    if adaptations:
+        b = _rates(before, cfg.learners)
+        lines.append("  test success before the correction (--adapt 0): "
+                     + ", ".join(f"{m} {b[m]:.0%}" for m in cfg.learners))
+        lines.append(f"  test success after {cfg.adapt} adaptation shots: "
+                     + ", ".join(f"{m} {rates[m]:.0%}" for m in cfg.learners))
+        for m, a in adaptations.items():
+            lines.append(f"  {m}: {int(a.sunk.sum())} of {len(a.steps)} adaptation shots sunk; "
+                         f"the green estimated: "
+                         f"{a.green.describe() if a.green else 'as the field'}")
     for m in cfg.learners:
         lines.append(f"  {m}: {rates[m]:.0%} sunk")
         mine = [r for r in rows if r["method"] == m and r["strategy"] != ""]
@@ -383,13 +417,14 @@ def play(config: PlayConfig | None = None, **overrides) -> dict:
     if cfg.robot not in robot_names() and ".urdf" not in str(cfg.robot):
         raise ValueError(f"unknown robot {cfg.robot!r}; known: {', '.join(robot_names())}")
     fld = load_field(cfg.field)
+    world = World.load(cfg.world, fld)   # another course than the field: refused here
     load_robot(cfg.robot)  # a robot that does not load fails before any work
     # the executor (a Dask scheduler too) is opened and checked before the long work starts
     with open_executor(cfg.workers, cfg.dask) as ex:
-        return _play(cfg, fld, ex, started)
+        return _play(cfg, fld, ex, started, world)
 
 
-def _play(cfg: PlayConfig, fld, ex, started: float) -> dict:
+def _play(cfg: PlayConfig, fld, ex, started: float, world: World | None = None) -> dict:
     """The steps of :func:`play` with an open executor ``ex`` (``started``: the run's start,
     for the total time in summary.txt)."""
     os.makedirs(os.path.join(cfg.out, "models"), exist_ok=True)
@@ -416,31 +451,76 @@ def _play(cfg: PlayConfig, fld, ex, started: float) -> dict:
     t3 = time.perf_counter()
     balls, holes = _situations(fld, cfg.shots, rng)
     shots = _round_shots(data, fitted, balls, holes)
-    rows = _play_round(cfg, scene, shots, ex)
-    times["round (robot + ball model)"] = time.perf_counter() - t3
-    if cfg.validate_shots > 0:
+    world = world or World(fld)
+    # the world the shots are really played on (the field itself unless --world)
+    played = Scene(cfg.robot, world.field, motion, data.stroke.launch_table, motion_dir)
+    rows = _play_round(cfg, played, shots, ex, world.engine)
+    times["round (robot + ball model)" if world.engine == "ball"
+          else "round (robot in exudyn)"] = time.perf_counter() - t3
+    adaptations, before = None, None
+    if cfg.adapt:
+        before = rows
+        for r in before:
+            r["adapt_shots"] = 0
+        t = time.perf_counter()
+        adaptations, adapt_rows = _adapt(cfg, scene, world, fitted, data)
+        times["adaptation"] = time.perf_counter() - t
+        t = time.perf_counter()
+        shots = _round_shots(data, {m: a.model for m, a in adaptations.items()}, balls, holes)
+        rows = _play_round(cfg, played, shots, ex, world.engine)
+        for r in rows:
+            r["adapt_shots"] = cfg.adapt
+        times["round after the correction"] = time.perf_counter() - t
+    if cfg.validate_shots > 0 and world.engine == "ball":
         t4 = time.perf_counter()
         _LOG.info("checking %d shots again in exudyn ...", cfg.validate_shots)
-        _check_in_exudyn(cfg, scene, shots, rows)
+        _check_in_exudyn(cfg, played, shots, rows)
         times["exudyn validation"] = time.perf_counter() - t4
+    all_rows = rows if before is None else adapt_rows + before + rows
     rates = _write_outputs(cfg, scene, (data, fitted, strategies), shots, rows,
-                           len(balls), times, started)
-    return {"success": rates, "times": times, "rows": rows}
+                           len(balls), times, started, all_rows=all_rows,
+                           adaptation=(world, adaptations, before))
+    return {"success": rates, "times": times, "rows": rows, "all_rows": all_rows,
+            "adaptations": adaptations}
+
+
+def _adapt(cfg: PlayConfig, scene: Scene, world: World, fitted: dict, data):
+    """Each learner's model corrected from ``cfg.adapt`` shots on the world
+    (:func:`~seds_casadi.game.adapt.adapt`); the adaptation shots as rows (phase "adapt")."""
+    adaptations, rows = {}, []
+    for m, model in fitted.items():
+        _LOG.info("%s: %d adaptation shots on %s ...", m, cfg.adapt, world.label)
+        a = adapt(scene, world, model, data, cfg.adapt, rng=np.random.default_rng(cfg.seed + 1),
+                  method=m, progress=_LOG.info if cfg.progress else None)
+        adaptations[m] = a
+        _LOG.info("%s: %d of %d adaptation shots sunk; the green estimated: %s", m,
+                  int(a.sunk.sum()), cfg.adapt, a.green.describe() if a.green else "nominal")
+        for k, step in enumerate(a.steps):
+            row = shot_row(step.result)
+            row.update(phase="adapt", adapt_shots=k)
+            rows.append(row)
+    return adaptations, rows
 
 
 def _write_outputs(cfg: PlayConfig, scene: Scene, learned: tuple, shots: list[Shot],
                    rows: list[dict], n_situations: int, times: dict,
-                   started: float | None = None) -> dict:
-    """``shots.csv``, the figures, the replay and ``summary.txt`` (with every stage's time)."""
+                   started: float | None = None, all_rows: list[dict] | None = None,
+                   adaptation: tuple | None = None) -> dict:
+    """``shots.csv``, the figures, the replay and ``summary.txt`` (with every stage's time).
+    ``rows``: the final round's; ``all_rows``: every shot played (with adaptation: the
+    adaptation shots, the round before and after the correction)."""
     fld, motion = scene.field, scene.motion
     data, fitted, strategies = learned
     atomic_csv(os.path.join(cfg.out, "shots.csv"), SHOT_COLUMNS,
-               ([r[c] for c in SHOT_COLUMNS] for r in rows))
+               ([r.get(c, "") for c in SHOT_COLUMNS] for r in (all_rows or rows)))
     t = time.perf_counter()
     _LOG.info("drawing the figures ...")
     play_figures(fld, motion, data, fitted, rows, cfg.learners, cfg.out, cfg.robot)
     if strategies is not None:
         strategy_figure(fld, strategies, rows, cfg.learners[0], cfg.out)
+    world, adaptations, before = adaptation or (None, None, None)
+    if adaptations:
+        adaptation_figure(fld, adaptations, before, rows, cfg.out)
     times["figures"] = time.perf_counter() - t
     if cfg.replay:
         t = time.perf_counter()
@@ -449,7 +529,8 @@ def _write_outputs(cfg: PlayConfig, scene: Scene, learned: tuple, shots: list[Sh
         times["replay"] = time.perf_counter() - t
         _LOG.info("wrote the replay of %d shots: %s and GIFs (%.1f s)", len(mine),
                   os.path.join(cfg.out, "replay.html"), times["replay"])
-    rates, text = _summary(cfg, fld, rows, n_situations, times, started)
+    rates, text = _summary(cfg, fld, rows, n_situations, times, started, world, adaptations,
+                           before)
     atomic_text(os.path.join(cfg.out, "summary.txt"), text)
     _LOG.info("%s", text.rstrip("\n"))
     _LOG.info("wrote %s, summary.txt, figures and models/ in %s",

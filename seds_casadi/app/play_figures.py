@@ -130,3 +130,84 @@ def strategy_figure(fld, strategies, rows, learner: str, out: str) -> None:
                  f"strategy "
                  f"{first['strategy']} (thick)", fontsize=9)
     save_figure(fig, os.path.join(out, "strategies.png"))
+
+
+def adaptation_figure(fld, adaptations: dict, before: list[dict], after: list[dict],
+                      out: str) -> None:
+    """``adaptation.png``: each adaptation shot's distance from the hole (sunk: 0) with the
+    test round's success before and after the correction, the green's parameters as the robot
+    estimated them shot after shot, and the learned correction of the first learner over the
+    situations (:mod:`seds_casadi.game.adapt`)."""
+    plt = pyplot()
+    fig, axs = plt.subplots(1, 3, figsize=(15, 4.4))
+    ax = axs[0]
+    for m, a in adaptations.items():
+        n = np.arange(1, len(a.steps) + 1)
+        line, = ax.plot(n, a.miss_distance, "o-", ms=4, lw=1, label=f"{m}: miss distance")
+        ax.plot(n[a.sunk], a.miss_distance[a.sunk], "*", ms=10, color=line.get_color())
+        b = np.mean([r["sunk"] for r in before if r["method"] == m])
+        f = np.mean([r["sunk"] for r in after if r["method"] == m])
+        ax.annotate(f"{m}: test {b:.0%} -> {f:.0%} sunk", xy=(0.98, 0.95 - 0.08 * len(
+            ax.texts)), xycoords="axes fraction", ha="right", va="top", fontsize=9,
+            color=line.get_color())
+    ax.set_xlabel("adaptation shot (stars: sunk)")
+    ax.set_ylabel("distance of the ball from the hole [m]")
+    ax.set_title("the shots of the budget", fontsize=10)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="center right")
+    ax = axs[1]
+    first = next(iter(adaptations.values()))
+    Q = np.array([s.green for s in first.steps]).reshape(-1, 5)
+    n = np.arange(1, len(Q) + 1)
+    ax.plot(n, np.exp(Q[:, 0]), "o-", ms=3, label="rolling resistance (x nominal)")
+    ax.plot(n, np.exp(Q[:, 3]), "s-", ms=3, label="launch speed (x measured)")
+    ax.set_ylabel("factor")
+    ax2 = ax.twinx()
+    ax2.plot(n, 100 * Q[:, 1], "--", color="C2", label="tilt x [%]")
+    ax2.plot(n, 100 * Q[:, 2], "--", color="C3", label="tilt y [%]")
+    ax2.set_ylabel("tilt [%]")
+    h1, l1 = ax.get_legend_handles_labels()
+    h2, l2 = ax2.get_legend_handles_labels()
+    ax.legend(h1 + h2, l1 + l2, fontsize=8, loc="best")
+    ax.set_xlabel(f"adaptation shot ({next(iter(adaptations))})")
+    ax.set_title("the green as the robot estimated it", fontsize=10)
+    ax.grid(alpha=0.3)
+    ax = axs[2]
+    model = first.model
+    balls, holes = fld.situations.sample(400, np.random.default_rng(0))
+    S = holes - balls
+    C = model.correction(S)
+    spread = np.ptp(S, axis=0)
+    if np.count_nonzero(spread > 1e-9) >= 2:
+        x = balls[:, 0] if np.ptp(balls[:, 0]) > 1e-9 else holes[:, 0]
+        y = balls[:, 1] if np.ptp(balls[:, 1]) > 1e-9 else holes[:, 1]
+        sc = ax.scatter(x, y, c=100 * (np.exp(C[:, 1]) - 1), cmap="coolwarm", s=14)
+        fig.colorbar(sc, ax=ax, label="kappa correction [%]")
+        if np.ptp(C[:, 0]) > 1e-6:   # the angle's correction as labelled contour lines
+            cs = ax.tricontour(x, y, C[:, 0], levels=6, colors="k", linewidths=0.7)
+            ax.clabel(cs, fmt="%.1f deg", fontsize=7)
+        ax.set_xlabel("ball x [m]")
+        ax.set_ylabel("ball y [m]")
+        ax.set_aspect("equal", adjustable="datalim")
+        for st in first.steps:
+            ax.plot(*st.result.shot.ball, "k+", ms=6)
+    else:
+        j = int(np.argmax(spread))
+        place = holes if np.ptp(holes[:, j]) > 1e-9 else balls
+        order = np.argsort(place[:, j])
+        ax.plot(place[order, j], C[order, 0], "C0-", label="alpha correction [deg]")
+        ax.set_ylabel("alpha correction [deg]")
+        ax2 = ax.twinx()
+        ax2.plot(place[order, j], 100 * (np.exp(C[order, 1]) - 1), "C1--",
+                 label="kappa correction [%]")
+        ax2.set_ylabel("kappa correction [%]")
+        ax.set_xlabel(f"{'hole' if place is holes else 'ball'} {'xy'[j]} [m]")
+        h1, l1 = ax.get_legend_handles_labels()
+        h2, l2 = ax2.get_legend_handles_labels()
+        ax.legend(h1 + h2, l1 + l2, fontsize=8)
+    ax.set_title(f"the learned correction ({next(iter(adaptations))}; +: shots played)",
+                 fontsize=10)
+    ax.grid(alpha=0.3)
+    fig.suptitle(f"self-correction on {first.world.label} (taught on {fld.name})", fontsize=11)
+    fig.tight_layout()
+    save_figure(fig, os.path.join(out, "adaptation.png"))

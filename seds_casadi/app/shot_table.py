@@ -15,11 +15,13 @@ __all__ = ["SHOT_COLUMNS", "shot_row"]
 #: club velocity's error at the hit, launch_direction_error_deg the club face's (the ball
 #: leaves along the face's normal); within_limits: no joint over a speed, torque or position
 #: limit during the swing; miss: the kind of miss (:data:`~seds_casadi.game.shot.MISSES`),
-#: miss_reason: why, in words (:attr:`~seds_casadi.game.shot.ShotResult.reason`)
+#: miss_reason: why, in words (:attr:`~seds_casadi.game.shot.ShotResult.reason`); phase:
+#: ``adapt`` for a shot of the adaptation budget (``play --adapt``), ``test`` for the round;
+#: adapt_shots: the adaptation shots the model had learned from when it played this shot
 SHOT_COLUMNS = ("method", "shot", "ball_x_m", "ball_y_m", "hole_x_m", "hole_y_m", "alpha_deg",
                 "kappa", "hit", "sunk", "direction_error_deg", "speed_error",
                 "launch_direction_error_deg", "within_limits", "final_x_m", "final_y_m",
-                "sunk_exudyn", "strategy", "miss", "miss_reason")
+                "sunk_exudyn", "strategy", "miss", "miss_reason", "phase", "adapt_shots")
 
 
 def shot_row(res: ShotResult) -> dict:
@@ -35,7 +37,8 @@ def shot_row(res: ShotResult) -> dict:
            "launch_direction_error_deg": res.launch_direction_error_deg,
            "within_limits": "" if res.within_limits is None else res.within_limits,
            "final_x_m": float(res.final_position[0]), "final_y_m": float(res.final_position[1]),
-           "sunk_exudyn": "", "miss": res.miss, "miss_reason": res.reason}
+           "sunk_exudyn": "", "miss": res.miss, "miss_reason": res.reason,
+           "phase": "test", "adapt_shots": 0}
     if res.path is not None:
         row["path"] = res.path
     return row

@@ -108,6 +108,9 @@ class ShotResult:
         The arm's mass at the face along its normal at the hit [kg] (NaN on exudyn).
     path : array, shape (k, 2) or None
         The ball's path (every 10 ms) after a hit.
+    path_time : array, shape (k,) or None
+        The times of the path's points [s] (from the launch on engine ``"ball"``, from the
+        start of the swing on ``"exudyn"``): what a camera's time stamps give.
     swing : SwingResult or None
         The simulated swing, with ``keep_swing`` (engine ``"ball"``).
     exudyn : ExudynShot or None
@@ -128,6 +131,7 @@ class ShotResult:
     launch_velocity: np.ndarray = field(default_factory=lambda: np.full(2, np.nan))
     effective_mass: float = np.nan
     path: np.ndarray | None = None
+    path_time: np.ndarray | None = None
     swing: SwingResult | None = None
     exudyn: object | None = None
 
@@ -234,7 +238,7 @@ def play_shots(scene: Scene | SceneSpec, shots: list[Shot], engine: str = "ball"
     groups: dict[int, list] = {}
     for item in launched:
         groups.setdefault(substeps(scene.field, item[2][None], BALL_STEP), []).append(item)
-    for group in groups.values():
+    for n_sub, group in groups.items():
         idx = [i for i, _, _ in group]
         res = simulate_shots(scene.field, np.array([shots[i].ball for i in idx]),
                              np.array([launch for _, _, launch in group]),
@@ -252,6 +256,7 @@ def play_shots(scene: Scene | SceneSpec, shots: list[Shot], engine: str = "ball"
                 launch_direction_error_deg=swing.face_error_deg,
                 within_limits=swing.within_limits, launch_velocity=launch,
                 effective_mass=swing.effective_mass, path=path,
+                path_time=np.arange(len(path)) * (BALL_STEP / n_sub),
                 swing=swing if keep_swing else None)
     return results
 
@@ -272,6 +277,7 @@ def _play_on_exudyn(scene: Scene, shot: Shot) -> ShotResult:
     v = np.asarray(ex.head_velocity, float)
     c = v @ commanded / max(np.linalg.norm(v) * np.linalg.norm(commanded), 1e-12)
     path = ex.path[:, 1:] if len(ex.path) else None
+    path_time = ex.path[:, 0] if len(ex.path) else None
     b = scene.field.bounds
     out = not (b[0] <= final[0] <= b[1] and b[2] <= final[1] <= b[3])
     miss, reason = ("", "") if ex.sunk else miss_reason(scene, shot, final, out, path)
@@ -279,7 +285,8 @@ def _play_on_exudyn(scene: Scene, shot: Shot) -> ShotResult:
         shot, "exudyn", True, bool(ex.sunk), final, reason=reason, miss=miss,
         direction_error_deg=float(np.degrees(np.arccos(np.clip(c, -1, 1)))),
         speed_error=float(np.linalg.norm(v) / np.linalg.norm(commanded) - 1),
-        launch_velocity=np.asarray(ex.launch_velocity, float), path=path, exudyn=ex)
+        launch_velocity=np.asarray(ex.launch_velocity, float), path=path,
+        path_time=path_time, exudyn=ex)
 
 
 def _play_task(spec: SceneSpec, shots: list[Shot], engine: str,

@@ -1,0 +1,620 @@
+"""Self-correction: a robot that learns from its own shots when the real green (the *world*)
+differs from the field it was taught on (beyond the paper; its Section 7.2.2 names the causes:
+a green slower or faster than its model, a tilted table, a contact that is not the impact
+model).
+
+The robot is taught on the nominal field (Section 5: the teacher's good shots, then GPR or
+GMR, Eq. 17-18). On the world it observes of each shot only what a camera would give: where the
+ball stopped and whether it was sunk. With a budget of ``N`` shots it corrects its taught model
+as follows.
+
+1. **Where to shoot** (:func:`next_situation`): the situation farthest from every situation
+   already played (greedy maximin over candidates drawn from the field's declared situations,
+   in situation coordinates scaled by their spread). With a stationary kernel the correction's
+   posterior variance depends only on the distances to the observed situations, so this is
+   where the correction is least known, without trusting hyperparameters fitted on a handful of
+   shots. The first shot goes to the centre of the declared situations.
+2. **What it learns from a shot** (:meth:`EndPointModel.equivalent`): the parameters
+   theta' = (alpha', kappa') with which the *nominal* ball model (the robot's measured launch,
+   :class:`~seds_casadi.minigolf.stroke.LaunchTable`, on the nominal field with the hole left
+   out) ends where the world's ball ended. The world then behaves locally like the model with
+   the parameters shifted by c = theta' - theta (in alpha and log kappa: a slower green is a
+   speed gain that is too small by a factor, a tilt an angle that is off). The good shot on the
+   world is the teacher's good shot on the model moved back by that shift:
+   theta* = theta_teacher(s) - c (the teacher of the nominal field at this situation,
+   :meth:`~seds_casadi.minigolf.teacher.Teacher.good_shot`). A sunk ball says the played
+   parameters are good: theta* = theta.
+3. **The correction** (:class:`CorrectedModel`): the taught model plus a residual, learned by
+   GPR (Eq. 17; a squared-exponential kernel, its prior mean the mean correction so far) on the
+   differences theta* - theta_taught(s) in (alpha [deg], log kappa). One shot gives a constant
+   correction; where no shot was played the correction returns to the mean. A speed gain that
+   the teacher held fixed (``fixed_speed``) is corrected as well: a fixed speed cannot sink a
+   ball on a faster green.
+
+:func:`adapt` runs the loop; ``seds-casadi play --world WORLD --adapt N`` uses it
+(:mod:`seds_casadi.app.play`).
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ..minigolf.ball import simulate_shots, substeps
+from ..minigolf.fields import FIELDS_FOLDER, Field, load_field
+from ..minigolf.hitting_data import HittingDataset
+from ..minigolf.parameters import GPRModel
+from ..minigolf.stroke import LaunchTable, Stroke
+from .scene import Scene
+from .shot import ENGINES, Shot, ShotResult, play_shot
+
+__all__ = ["World", "check_world", "Green", "Observation", "estimate_green", "CorrectedModel",
+           "Adaptation", "AdaptationStep", "adapt", "next_situation", "GREEN_PARAMETERS",
+           "world_names"]
+
+#: what a world may change of its field (the green); everything else is the course
+_GREEN = ("name", "surface", "stimp", "rolling_resistance", "wall_restitution", "teacher")
+
+
+@dataclass(frozen=True)
+class World:
+    """Where the shots are really played: a green that may differ from the robot's model.
+
+    Attributes
+    ----------
+    field : Field
+        The world's field (the same course as the nominal field: bounds, walls, hole and
+        situations; the green may differ).
+    engine : {"ball", "exudyn"}
+        The ball model after the arm's simulated swing, or exudyn's multibody model of arm,
+        club and ball with contact (:func:`~seds_casadi.game.shot.play_shot`).
+    label : str
+        How the world is named in outputs.
+    """
+
+    field: Field
+    engine: str = "ball"
+    label: str = ""
+
+    def __post_init__(self) -> None:
+        if self.engine not in ENGINES:
+            raise ValueError(f"unknown engine {self.engine!r}; choose one of "
+                             f"{', '.join(ENGINES)}")
+        if not self.label:
+            object.__setattr__(self, "label", self.field.name if self.engine == "ball"
+                               else f"{self.field.name} in exudyn")
+
+    @classmethod
+    def load(cls, world: str | None, nominal: Field) -> World:
+        """The world named on the command line: None (the nominal field itself), ``"exudyn"``
+        (the nominal field in exudyn's multibody model) or a field name or ``.json`` file,
+        checked to be the same course (:func:`check_world`)."""
+        if world is None:
+            return cls(nominal, "ball", nominal.name)
+        if str(world) == "exudyn":
+            return cls(nominal, "exudyn")
+        name = str(world)
+        if name in world_names():
+            name = os.path.join(FIELDS_FOLDER, "worlds", name + ".json")
+        fld = load_field(name)
+        check_world(fld, nominal)
+        return cls(fld, "ball")
+
+
+def world_names() -> list[str]:
+    """Names of the worlds shipped with the package (``fields/worlds/``): shipped fields with
+    another green, for ``play --world``."""
+    folder = os.path.join(FIELDS_FOLDER, "worlds")
+    if not os.path.isdir(folder):
+        return []
+    return sorted(f[:-5] for f in os.listdir(folder) if f.endswith(".json"))
+
+
+def _plain(v):
+    """Numbers and lists of a field specification as plain Python values (for messages)."""
+    if isinstance(v, dict):
+        return {k: _plain(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple, np.ndarray)):
+        return [_plain(x) for x in v]
+    if isinstance(v, (float, np.floating)):
+        return float(v)
+    return v
+
+
+def check_world(world: Field, nominal: Field) -> None:
+    """Refuse a world that is another course than the nominal field.
+
+    A world may differ from the field only in its green (surface, stimp or rolling
+    resistance, wall restitution): the robot cannot play a course whose bounds, walls, hole or
+    situations differ from those it was taught on. ``ValueError`` names the first difference.
+    """
+    checks = [("bounds", world.bounds.tolist(), nominal.bounds.tolist()),
+              ("boundary", world.boundary, nominal.boundary),
+              ("hole", [*world.hole.tolist(), world.hole_radius],
+               [*nominal.hole.tolist(), nominal.hole_radius]),
+              ("ball_region", world.ball_region.tolist(), nominal.ball_region.tolist()),
+              ("situations", _plain(world.situations.to_spec()),
+               _plain(nominal.situations.to_spec()))]
+    for what, w, n in checks:
+        if w != n:
+            raise ValueError(f"the world {world.name!r} is another course than the field "
+                             f"{nominal.name!r}: its {what} {w} differ from {n}; a world may "
+                             f"differ only in its green ({', '.join(_GREEN[1:5])})")
+
+
+class TiltedSurface:
+    """A surface tilted by a plane: H(p) + t . p (the green's tilt the robot estimates).
+
+    Delegates everything else to the surface it tilts; the ball model's numpy engine reads
+    it (:func:`~seds_casadi.minigolf.ball.simulate_shots` with ``engine="numpy"``).
+    """
+
+    def __init__(self, base, tilt) -> None:
+        self.base = base
+        self.tilt = np.asarray(tilt, float).reshape(2)
+
+    def __getattr__(self, name):
+        return getattr(self.base, name)
+
+    def height(self, P) -> np.ndarray:
+        P = np.atleast_2d(P)
+        return self.base.height(P) + P @ self.tilt
+
+    def gradient(self, P) -> np.ndarray:
+        return self.base.gradient(P) + self.tilt
+
+    def extremes(self, bounds, spacing: float = 0.01) -> dict:
+        e = dict(self.base.extremes(bounds, spacing))
+        b = np.asarray(bounds, float)
+        e["slope"] = e["slope"] + float(np.linalg.norm(self.tilt))
+        e["height_range"] = e["height_range"] + float(
+            abs(self.tilt[0]) * (b[1] - b[0]) + abs(self.tilt[1]) * (b[3] - b[2]))
+        return e
+
+
+@dataclass(frozen=True)
+class Observation:
+    """What the robot sees of a shot on the world (a camera): the ball's path with its times,
+    where it stopped, whether it sank, and the hit it played.
+
+    Attributes
+    ----------
+    ball : array (2,)
+    alpha, kappa : float
+        The hit played (alpha [rad]).
+    times : array (k,)
+        Seconds from the launch (the ball's first movement).
+    path : array (k, 2)
+    final : array (2,)
+    sunk : bool
+    """
+
+    ball: np.ndarray
+    alpha: float
+    kappa: float
+    times: np.ndarray
+    path: np.ndarray
+    final: np.ndarray
+    sunk: bool
+
+    @classmethod
+    def from_result(cls, res: ShotResult) -> Observation | None:
+        """The observation of a played shot (None when the club did not hit the ball)."""
+        if not res.hit or res.path is None or len(res.path) < 3:
+            return None
+        P = np.asarray(res.path, float)
+        T = (np.asarray(res.path_time, float) if res.path_time is not None
+             else np.arange(len(P)) * 0.01)
+        # the launch: the first movement, back-extrapolated from the first moving step
+        moved = np.flatnonzero(np.linalg.norm(P - P[0], axis=1) > 1e-3)
+        if moved.size == 0:
+            return None
+        j = int(moved[0])
+        step = max(float(np.linalg.norm(P[j] - P[j - 1])) if j > 0 else 0.0, 1e-9)
+        t0 = T[j] - float(np.linalg.norm(P[j] - P[0])) / step * (T[j] - T[max(j - 1, 0)])
+        keep = slice(max(j - 1, 0), None)
+        return cls(np.asarray(res.shot.ball, float), res.shot.alpha, res.shot.kappa,
+                   T[keep] - t0, P[keep], np.asarray(res.final_position, float), res.sunk)
+
+
+#: the green's parameters the robot estimates (:class:`Green`): log of the rolling resistance's
+#: factor, the tilt (dH/dx, dH/dy), log of the launch speed's factor, the launch's angle offset
+#: [rad]; and the prior spread of each (how far the world is expected from its model)
+GREEN_PARAMETERS = ("log_rolling_resistance", "tilt_x", "tilt_y", "log_launch_speed",
+                    "launch_angle")
+GREEN_PRIOR = np.array([0.5, 0.01, 0.01, 0.2, np.deg2rad(3.0)])
+#: the camera's position noise assumed by the fit [m]
+CAMERA_SIGMA = 0.01
+
+
+@dataclass(frozen=True)
+class Green:
+    """The robot's model of the world's green: the nominal field and the robot's launch,
+    changed by the estimated parameters q (:data:`GREEN_PARAMETERS`; zeros: the nominal).
+
+    The rolling resistance is rho exp(q0), the surface is tilted by (q1, q2), the launch is
+    exp(q3) faster and turned by q4 (the robot's :class:`~seds_casadi.minigolf.stroke.LaunchTable`
+    changed so).
+    """
+
+    nominal: Field
+    stroke: Stroke
+    q: np.ndarray = field(default_factory=lambda: np.zeros(len(GREEN_PARAMETERS)))
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "q", np.asarray(self.q, float).reshape(len(GREEN_PARAMETERS)))
+        if self.stroke.launch_table is None:
+            raise ValueError("the robot's launch must be measured first "
+                             "(seds_casadi.game.calibrate_launch)")
+
+    @property
+    def field(self) -> Field:
+        """The estimated field (its ball model runs on the numpy engine)."""
+        q = self.q
+        return replace(self.nominal, name=f"{self.nominal.name} (estimated)",
+                       surface=TiltedSurface(self.nominal.surface, q[1:3]),
+                       rolling_resistance=self.nominal.rolling_resistance * float(np.exp(q[0])))
+
+    @property
+    def launch_stroke(self) -> Stroke:
+        """The robot's stroke with the estimated launch."""
+        t = self.stroke.launch_table
+        table = LaunchTable(t.alphas, t.kappas, t.speed_factor * float(np.exp(self.q[3])),
+                            t.angle_offset + self.q[4], t.robot)
+        return self.stroke.with_launch(table)
+
+    def describe(self) -> str:
+        """The estimate in words."""
+        q = self.q
+        return (f"rolling resistance x{np.exp(q[0]):.2f}, tilt ({100 * q[1]:+.2f} %, "
+                f"{100 * q[2]:+.2f} %), launch x{np.exp(q[3]):.3f} turned "
+                f"{np.rad2deg(q[4]):+.2f} deg")
+
+    def simulate(self, balls, alphas, kappas, hole_free: bool = True):
+        """The estimated green's ball model for hits (alpha [rad], kappa) from ``balls``
+        (n, 2), with paths (numpy engine); ``hole_free``: a hole too small to catch a ball."""
+        fld = self.field
+        if hole_free:
+            fld = replace(fld, hole_radius=1e-6)
+        V = self.launch_stroke.launch_velocity(alphas, kappas)
+        return simulate_shots(fld, np.asarray(balls, float), V, dt=0.01, engine="numpy",
+                              record_paths=True), 0.01 / substeps(fld, V, 0.01)
+
+    def end_points(self, balls, alphas, kappas) -> np.ndarray:
+        """Where the hits (alpha [rad], kappa) from ``balls`` (n, 2) end on this green, the hole
+        left out, shape (n, 2)."""
+        fld = replace(self.field, hole_radius=1e-6)
+        V = self.launch_stroke.launch_velocity(alphas, kappas)
+        return simulate_shots(fld, np.asarray(balls, float), V, dt=0.01,
+                              engine="numpy").final_position
+
+    def residuals(self, observations: list[Observation], every: float = 0.1) -> np.ndarray:
+        """Differences between the observed paths (at ``every`` seconds and at their ends) and
+        the estimated green's, over :data:`CAMERA_SIGMA`, and the prior's terms."""
+        B = np.array([o.ball for o in observations])
+        res, dt = self.simulate(B, np.array([o.alpha for o in observations]),
+                                np.array([o.kappa for o in observations]))
+        out = []
+        for o, path in zip(observations, res.paths):
+            tm = np.arange(len(path)) * dt
+            ts = np.append(np.arange(0.0, o.times[-1], every), o.times[-1])
+            obs = np.column_stack([np.interp(ts, o.times, o.path[:, j]) for j in range(2)])
+            mod = np.column_stack([np.interp(ts, tm, path[:, j]) for j in range(2)])
+            out.append(((mod - obs) / CAMERA_SIGMA).ravel())
+            if not o.sunk:   # where it stopped, at whatever time the model stops
+                out.append((path[-1] - o.final) / CAMERA_SIGMA)
+        out.append(self.q / GREEN_PRIOR)
+        return np.concatenate(out)
+
+
+def estimate_green(green: Green, observations: list[Observation], last: int = 6) -> Green:
+    """The green's parameters that best explain the observed paths (least squares over the
+    ``last`` observations, from the current estimate, regularised towards the nominal field by
+    :data:`GREEN_PRIOR`)."""
+    from scipy.optimize import least_squares
+
+    obs = [o for o in observations if o is not None][-int(last):]
+    if not obs:
+        return green
+    scale = GREEN_PRIOR
+
+    def fun(z):
+        return Green(green.nominal, green.stroke, z * scale).residuals(obs)
+
+    # from the last estimate and from the nominal green: a tilt along the line of play and
+    # a rolling resistance both slow the ball down, and a first estimate can take the one
+    # for the other; the better fit of the two is kept
+    best = None
+    for start in (green.q / scale, np.zeros_like(green.q)):
+        sol = least_squares(fun, start, method="trf", diff_step=1e-3, x_scale=1.0,
+                            max_nfev=20, xtol=1e-3, ftol=1e-3)
+        if best is None or sol.cost < best.cost:
+            best = sol
+        if not np.any(green.q):
+            break
+    sol = best
+    return Green(green.nominal, green.stroke, sol.x * scale)
+
+class CorrectedModel:
+    """A taught hitting-parameter model plus a learned correction (module docstring, step 3).
+
+    Parameters
+    ----------
+    base : fitted GPRModel or GMRModel
+        The taught model: s = hole - ball -> alpha [deg] (and kappa).
+    fixed_kappa : float or None
+        The teacher's fixed speed gain when ``base`` predicts the angle only.
+    random_state : int
+        Of the correction's GPR.
+
+    Attributes
+    ----------
+    S_, D_ : arrays, shapes (m, 2)
+        Situations of the adaptation shots and the corrections they imply (alpha [deg],
+        log kappa).
+    """
+
+    def __init__(self, base, fixed_kappa: float | None = None, random_state: int = 0) -> None:
+        self.base = base
+        self.fixed_kappa = fixed_kappa
+        self.random_state = random_state
+        self.S_ = np.zeros((0, 2))
+        self.D_ = np.zeros((0, 2))
+        self._gp: GPRModel | None = None
+
+    def taught(self, S) -> np.ndarray:
+        """The taught model's (alpha [deg], kappa), shape (n, 2)."""
+        S = np.atleast_2d(np.asarray(S, float))
+        pred = np.asarray(self.base.predict(S), float).reshape(len(S), -1)
+        if pred.shape[1] > 1:
+            return pred[:, :2]
+        if self.fixed_kappa is None:
+            raise ValueError("the model predicts the angle only: give its fixed_kappa")
+        return np.column_stack([pred[:, 0], np.full(len(S), float(self.fixed_kappa))])
+
+    def fit_correction(self, S, D) -> CorrectedModel:
+        """Learn the correction from situations S (m, 2) and their corrections D (m, 2):
+        alpha [deg] and log kappa; returns self."""
+        S = np.atleast_2d(np.asarray(S, float))
+        D = np.atleast_2d(np.asarray(D, float))
+        if S.shape != D.shape or S.shape[1] != 2 or not np.all(np.isfinite(D)):
+            raise ValueError(f"S and D must be finite, shapes (m, 2); got {S.shape}, {D.shape}")
+        self.S_, self.D_ = S, D
+        self._gp = None
+        distinct = len(np.unique(np.round(S, 9), axis=0))
+        if distinct >= 2:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                self._gp = GPRModel(n_restarts=2, random_state=self.random_state).fit(S, D)
+        return self
+
+    def correction(self, S) -> np.ndarray:
+        """The learned correction (n, 2): alpha [deg] and log kappa (zero before any shot)."""
+        S = np.atleast_2d(np.asarray(S, float))
+        if len(self.D_) == 0:
+            return np.zeros((len(S), 2))
+        if self._gp is None:
+            return np.tile(self.D_.mean(axis=0), (len(S), 1))
+        return self._gp.predict(S)
+
+    def predict(self, S) -> np.ndarray:
+        """Corrected (alpha [deg], kappa), shape (n, 2)."""
+        T = self.taught(S)
+        C = self.correction(S)
+        return np.column_stack([T[:, 0] + C[:, 0], T[:, 1] * np.exp(C[:, 1])])
+
+
+@dataclass
+class AdaptationStep:
+    """One shot of the budget: what was played and observed, and the green estimated after it.
+
+    Attributes
+    ----------
+    result : ShotResult
+        The shot on the world (the robot uses only what :class:`Observation` keeps of it).
+    green : array (5,)
+        The green's parameters estimated after this shot (:data:`GREEN_PARAMETERS`).
+    miss_distance : float
+        From the ball's end to the hole [m] (0 when sunk).
+    """
+
+    result: ShotResult
+    green: np.ndarray
+    miss_distance: float
+
+
+@dataclass
+class Adaptation:
+    """The outcome of :func:`adapt`: the corrected model, the estimated green and the shots."""
+
+    model: CorrectedModel
+    world: World
+    green: Green | None = None
+    steps: list[AdaptationStep] = field(default_factory=list)
+
+    @property
+    def sunk(self) -> np.ndarray:
+        """Whether each adaptation shot sank."""
+        return np.array([s.result.sunk for s in self.steps], bool)
+
+    @property
+    def miss_distance(self) -> np.ndarray:
+        """Each adaptation shot's distance from the hole [m] (0: sunk)."""
+        return np.array([s.miss_distance for s in self.steps])
+
+
+def next_situation(candidates: tuple[np.ndarray, np.ndarray], played: np.ndarray,
+                   scale: np.ndarray) -> int:
+    """Index of the candidate situation (balls, holes) to play next (module docstring, step
+    1): the centre of the candidates first, then the farthest from every situation played
+    (s = hole - ball, scaled by ``scale``)."""
+    balls, holes = candidates
+    S = (holes - balls) / scale
+    if len(played) == 0:
+        return int(np.argmin(np.sum((S - np.median(S, axis=0)) ** 2, axis=1)))
+    P = np.atleast_2d(played) / scale
+    d = np.min(np.sum((S[:, None, :] - P[None, :, :]) ** 2, axis=2), axis=1)
+    return int(np.argmax(d))
+
+
+def hole_passage(green: Green, balls, holes, alphas, kappas) -> np.ndarray:
+    """How the hits' balls pass their holes on a green (the hole left out), shape (n, 2): the
+    signed distance from the hole's centre to the path where it passes nearest [m] (positive:
+    the hole on the path's left), and the squared speed there [m^2/s^2]; for a ball that stops
+    before it reaches the hole, minus 2 a d (d its distance short of the hole, a the rolling
+    deceleration): the squared speed it lacked. Continuous in the hit, so Newton's method can
+    steer it (:func:`matching_shots`)."""
+    holes = np.atleast_2d(np.asarray(holes, float))
+    res, dt = green.simulate(balls, alphas, kappas)
+    a_roll = 5 / 7 * green.field.rolling_resistance * 9.81
+    out = np.zeros((len(holes), 2))
+    for i, (path, h) in enumerate(zip(res.paths, holes)):
+        if len(path) < 2:
+            out[i] = [0.0, -2 * a_roll * float(np.linalg.norm(h - path[0]))]
+            continue
+        seg = np.diff(path, axis=0)
+        L2 = np.maximum(np.sum(seg * seg, axis=1), 1e-18)
+        lam = np.clip(np.sum((h - path[:-1]) * seg, axis=1) / L2, 0.0, 1.0)
+        near = path[:-1] + lam[:, None] * seg
+        j = int(np.argmin(np.sum((near - h) ** 2, axis=1)))
+        u = seg[j] / np.sqrt(L2[j])
+        d = h - near[j]
+        offset = float(u[0] * d[1] - u[1] * d[0])
+        ahead = float(d @ u)
+        if j == len(seg) - 1 and ahead > 1e-9:   # stopped short of the hole
+            out[i] = [offset, -2 * a_roll * ahead]
+        else:
+            out[i] = [offset, L2[j] / dt**2]
+    return out
+
+
+def matching_shots(green: Green, balls, holes, alphas, kappas, iterations: int = 8,
+                   tolerance=(0.003, 0.01)) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The hits on the estimated green whose balls pass their holes as the given hits' balls
+    pass them on the nominal green: at the same side distance and the same speed
+    (:func:`hole_passage`): (alpha [rad], kappa, converged) per ball; where Newton's method
+    did not get within ``tolerance`` (metres, m^2/s^2), its best iterate and False.
+
+    The given hits are the taught ones: they sink on the nominal green, so hits that cross
+    the hole in the same way sink on the estimated one; on a green equal to the nominal they
+    are returned unchanged. Newton's method on (alpha, log kappa), all balls at once, with
+    finite differences and steps of at most 5 deg and 20 % in kappa.
+    """
+    balls = np.atleast_2d(np.asarray(balls, float))
+    holes = np.atleast_2d(np.asarray(holes, float))
+    A0 = np.asarray(alphas, float).ravel()
+    L0 = np.log(np.asarray(kappas, float).ravel())
+    nominal = Green(green.nominal, green.stroke)
+    goal = hole_passage(nominal, balls, holes, A0, np.exp(L0))
+    tol = np.asarray(tolerance, float)
+    A, L = A0.copy(), L0.copy()
+    n, ha, hl = len(A), 2e-3, 2e-3
+    ok = np.zeros(n, bool)
+    best = np.full(n, np.inf)
+    bA, bL = A.copy(), L.copy()
+    for _ in range(int(iterations)):
+        E = hole_passage(green, np.vstack([balls] * 3), np.vstack([holes] * 3),
+                         np.concatenate([A, A + ha, A]), np.exp(np.concatenate([L, L, L + hl])))
+        F = E[:n] - goal
+        size = np.max(np.abs(F) / tol, axis=1)
+        better = size < best
+        best[better], bA[better], bL[better] = size[better], A[better], L[better]
+        ok = best < 1
+        if ok.all():
+            break
+        J = np.stack([(E[n:2 * n] - E[:n]) / ha, (E[2 * n:] - E[:n]) / hl], axis=2)
+        det = J[:, 0, 0] * J[:, 1, 1] - J[:, 0, 1] * J[:, 1, 0]
+        det = np.where(np.abs(det) > 1e-12, det, 1e-12)
+        dA = -(J[:, 1, 1] * F[:, 0] - J[:, 0, 1] * F[:, 1]) / det
+        dL = -(-J[:, 1, 0] * F[:, 0] + J[:, 0, 0] * F[:, 1]) / det
+        move = ~ok
+        A[move] += np.clip(dA[move], -np.deg2rad(5.0), np.deg2rad(5.0))
+        L[move] += np.clip(dL[move], -0.2, 0.2)
+    return bA, np.exp(bL), ok
+
+
+def adapt(scene: Scene, world: World, base, data: HittingDataset, budget: int,
+          rng: np.random.Generator | None = None, method: str = "", progress=None,
+          n_candidates: int = 256, n_teach: int = 24) -> Adaptation:
+    """Correct a taught hitting-parameter model from at most ``budget`` shots on the world
+    (module docstring).
+
+    Parameters
+    ----------
+    scene : Scene
+        The nominal scene (robot, nominal field, motion, the robot's measured launch): what
+        the robot knows.
+    world : World
+        Where the shots are played.
+    base : fitted model
+        The taught hitting-parameter model (GPR or GMR on ``data``).
+    data : HittingDataset
+        The teacher's data set ``base`` was fitted on (its strategy, situations and launch).
+    budget : int
+        Adaptation shots (>= 0).
+    rng : numpy Generator, optional
+        Draws the candidate situations (default: seed 0).
+    method : str
+        The learner's name (a label in the shots).
+    progress : callable, optional
+        Called with a line of text after each shot.
+    n_candidates : int
+        Situations drawn from the field's declaration to choose the shots from.
+    n_teach : int
+        Situations of the data set (equally spaced) the correction is learned on.
+
+    Returns
+    -------
+    Adaptation
+    """
+    if int(budget) < 0:
+        raise ValueError(f"the adaptation budget must be >= 0 shots, got {budget}")
+    rng = np.random.default_rng(0) if rng is None else rng
+    fixed = float(data.kappa[0]) if data.strategy == "fixed_speed" else None
+    model = CorrectedModel(base, fixed)
+    out = Adaptation(model, world)
+    if int(budget) == 0:
+        return out
+    stroke = scene.stroke if scene.launch_table is not None else data.stroke
+    green = Green(scene.field, stroke)
+    world_scene = Scene(scene.robot, world.field, scene.motion, scene.launch_table,
+                        scene.motion_folder)
+    cand = scene.field.situations.sample(int(n_candidates), rng)
+    spread = np.ptp(cand[1] - cand[0], axis=0)
+    scale = np.where(spread > 1e-9, spread, 1.0)
+    played, observations = [], []
+    for k in range(int(budget)):
+        i = next_situation(cand, np.array(played).reshape(-1, 2), scale)
+        ball, hole = cand[0][i], cand[1][i]
+        s = hole - ball
+        a_deg, kap = model.taught(s[None])[0]
+        if observations:   # the taught shot, corrected for the green estimated so far
+            a1, k1, _ = matching_shots(green, ball[None], hole[None], [np.deg2rad(a_deg)],
+                                       [kap])
+            a_deg, kap = float(np.rad2deg(a1[0])), float(k1[0])
+        shot = Shot(ball, hole, float(np.deg2rad(a_deg)), float(kap), method=method, index=k)
+        res = play_shot(world_scene, shot, engine=world.engine)
+        played.append(s)
+        obs = Observation.from_result(res)
+        if obs is not None:
+            observations.append(obs)
+            green = estimate_green(green, observations)
+        miss = 0.0 if res.sunk else float(np.linalg.norm(res.final_position - hole))
+        out.steps.append(AdaptationStep(res, green.q.copy(), miss))
+        if progress is not None:
+            progress(f"adaptation shot {k + 1}/{budget} ({method}): "
+                     + ("sunk" if res.sunk else res.reason) + f"; green: {green.describe()}")
+    # the correction learned over the situations: the teacher's good shots moved onto the
+    # estimated green, at n_teach of the data set's situations
+    idx = np.unique(np.linspace(0, len(data) - 1, min(int(n_teach), len(data))).round()
+                    .astype(int))
+    A1, K1, ok = matching_shots(green, data.ball[idx], data.hole[idx], data.alpha[idx],
+                                data.kappa[idx])
+    C = np.column_stack([np.rad2deg(A1 - data.alpha[idx]), np.log(K1 / data.kappa[idx])])
+    if ok.any():
+        model.fit_correction(data.situations[idx][ok], C[ok])
+    out.green = green
+    return out
