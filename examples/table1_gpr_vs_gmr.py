@@ -63,6 +63,8 @@ fig10("double_hill", datasets["double_hill"][1],
       sinking=sinking["double_hill"] if noisy else None)
 fig11(datasets["arctan"][1], ax_row=[fig.add_subplot(2, 4, 5 + i) for i in range(4)],
       sinking=sinking["arctan"] if noisy else None)
-fig.suptitle("Fig. 10 (top): GPR and GMR on the double hill; Fig. 11 (bottom): joint GMM, arctan")
+fig.suptitle("Fig. 10 (top): GPR and GMR on the double hill, 10 random points of the centred "
+             "range; Fig. 11 (bottom): joint GMM, arctan")
+fig.subplots_adjust(hspace=0.45)
 fig.savefig(args.out, dpi=110, bbox_inches="tight")
 print(f"wrote {args.out}")

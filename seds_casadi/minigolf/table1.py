@@ -21,13 +21,17 @@ describes it, and ``"grid"``, the protocol of this package before (issues 4 and 
    ball model; models, counts and repetitions as below.
 
 The width of the centred range is not given in the text; :data:`CENTRE_FRACTION` = 0.6 (the
-middle 12 of the 20 points) follows from two of its statements: "10 random training points"
-are drawn from that range, so it must hold more than 10 of the 20 points (more than half the
-range; 0.6 is the narrowest width on the 20-point line that leaves the 10-point draw a choice
-of more than one pair to leave out), and GPR, which "outputs zero far from the training data",
-sinks 0.54-0.59 with random points on the rough flat field where equally spaced ones sink 0.96:
-about the fraction of the range the training points cover. With 0.6 the 10-point draw leaves
-out 2 of 12 centred points (66 training sets), not 1 of 11 or none of 10.
+middle 12 of the 20 points) follows from two of its statements. "10 random training points" are
+drawn from that range, so it holds more than 10 of the 20 points: more than half the range (with
+0.6 the 10-point draw leaves out 2 of 12 centred points, 66 possible training sets). And GPR,
+which "outputs zero far from the training data", sinks 0.54-0.59 with random points on the
+rough flat field where equally spaced ones sink 0.96: about the part of the range the training
+points cover, and hardly more with 10 points than with 5.
+
+The examples are redrawn in every repetition (the paper collected one data set), so the means
+average over the teacher's noise as well as over the training sets. ``noise_spread`` and
+``centre_fraction`` of :func:`run_table1` change the two choices
+(``benchmarks/table1_sensitivity.py``).
 
 ``"grid"``, for each field and training-set kind:
 
