@@ -1,0 +1,83 @@
+"""Self-correction (issue 32): test success before and after ``--adapt N`` shots on worlds
+whose green differs from the field the robot was taught on, GPR and GMR.
+
+    python benchmarks/eval_self_correction.py [--adapt 30] [--shots 20] [--out DIR]
+
+Runs ``seds-casadi play --field F --world W --adapt N --validate 0`` (the API, the same code)
+for the shipped worlds (``fields/worlds``), ``--world exudyn``, the nominal field itself (no
+regression) and two worlds written here that the green's model cannot describe exactly
+(taller hills on double hill, a rough flat green at stimp 8: not tuned for), and prints a
+table. Takes about 3 minutes per world on 2 cores.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import tempfile
+import time
+
+from seds_casadi.app.play import play
+from seds_casadi.minigolf.fields import FIELDS_FOLDER
+
+
+def _world(src: str, name: str, folder: str, **change) -> str:
+    with open(os.path.join(FIELDS_FOLDER, src + ".json")) as fh:
+        d = json.load(fh)
+    d["name"] = name
+    for k, v in change.items():
+        d[k] = v
+    path = os.path.join(folder, name + ".json")
+    with open(path, "w") as fh:
+        json.dump(d, fh)
+    return path
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--adapt", type=int, default=30)
+    ap.add_argument("--shots", type=int, default=20)
+    ap.add_argument("--out", default=os.path.join(tempfile.gettempdir(), "self_correction"))
+    ap.add_argument("--only", nargs="*", default=None, help="run only these world labels")
+    a = ap.parse_args()
+    os.makedirs(a.out, exist_ok=True)
+    with open(os.path.join(FIELDS_FOLDER, "double_hill.json")) as fh:
+        hills = json.load(fh)["surface"]
+    for h in hills["hills"]:
+        h["height"] = round(h["height"] * 1.3, 4)
+    cases = [
+        ("arctan", "arctan_stimp8", "slower green (stimp 8 for 10)"),
+        ("flat", "flat_tilted", "tilted 1 % sideways"),
+        ("double_hill", "double_hill_stimp12", "faster green (stimp 12 for 10)"),
+        ("arctan", "exudyn", "exudyn's multibody model"),
+        ("arctan", None, "the field itself (no regression)"),
+        ("double_hill", _world("double_hill", "double_hill_tall", a.out, surface=hills),
+         "untuned: hills 30 % taller"),
+        ("rough_flat", _world("rough_flat", "rough_flat_stimp8", a.out, stimp=8),
+         "untuned: rough flat at stimp 8"),
+    ]
+    rows = []
+    for field, world, what in cases:
+        label = os.path.basename(str(world)).removesuffix(".json")
+        if a.only and label not in a.only:
+            continue
+        t = time.perf_counter()
+        res = play(field=field, world=world, adapt=a.adapt, shots=a.shots, validate_shots=0,
+                   out=os.path.join(a.out, f"{field}_{label}"), progress=False)
+        before = {m: sum(r["sunk"] for r in res["all_rows"]
+                         if r["method"] == m and r["phase"] == "test" and r["adapt_shots"] == 0)
+                  / a.shots for m in ("gpr", "gmr")}
+        rows.append((field, label, what, before, res["success"], time.perf_counter() - t))
+        print(f"{field:12s} {label:22s} {what:36s} before gpr {before['gpr']:.2f} gmr "
+              f"{before['gmr']:.2f} | after {a.adapt}: gpr {res['success']['gpr']:.2f} gmr "
+              f"{res['success']['gmr']:.2f} ({rows[-1][-1]:.0f} s)", flush=True)
+    print(f"\n| field | world | before GPR | before GMR | after {a.adapt} GPR | after GMR |")
+    print("|---|---|---|---|---|---|")
+    for field, label, what, b, f, _ in rows:
+        print(f"| {field} | {label} ({what}) | {b['gpr']:.2f} | {b['gmr']:.2f} | "
+              f"{f['gpr']:.2f} | {f['gmr']:.2f} |")
+
+
+if __name__ == "__main__":
+    main()
