@@ -1,7 +1,8 @@
 """Minigolf: fields (``fields``, shipped and the user's own JSON files; their ``surface`` and
 the ``situations`` they declare), the ball model (``ball``: rolling, skidding, walls, hole
 capture and the numpy reference; ``ball_kernel``: the compiled engine), the hit (``stroke``),
-the teacher that finds good shots (``teacher``) and its data sets (``hitting_data``), the
+the teacher that finds good shots (``teacher``), its data sets (``hitting_data``) and the
+sinking set around its shots that noisy examples are drawn from (``sinking``, Eq. 15), the
 hitting-parameter learners (``parameters``: GPR, GMR), the protocol of the paper's Table 1
 (``table1``) and several strategies (``strategies``: explored and clustered;
 ``strategy_choice``: the one most likely to succeed). It imports :mod:`seds_casadi.motion`,
