@@ -47,7 +47,8 @@ for name in fields:
     f = load_field(name)
     datasets[name] = (f, collect_dataset(f, stroke, progress=True, **teacher))
     # the parameters around each good shot that sink the ball too (Eq. 15's noise)
-    sinking[name] = sinking_set(Teacher(f, stroke, **teacher), datasets[name][1])
+    scan = {"n_gains": 3, "step_deg": 0.05} if args.quick else {}
+    sinking[name] = sinking_set(Teacher(f, stroke, **teacher), datasets[name][1], **scan)
 with open_executor(args.workers) as ex:
     means, _ = run_table1(datasets, 2 if args.quick else args.repetitions, executor=ex,
                           progress=True, protocol=args.protocol, sinking=sinking)
