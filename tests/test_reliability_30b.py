@@ -19,6 +19,8 @@ import time
 import casadi as ca
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from seds_casadi.codegen import compile_functions, compiler_available
 from seds_casadi.codegen.cache import CompileError, shared_library
@@ -131,3 +133,96 @@ def test_two_cached_libraries_swapped_with_their_records_are_rebuilt(tmp_path):
     assert a.read_bytes() == data_b
     assert run() == want
     assert a.read_bytes() == data_a and b.read_bytes() == data_b  # rebuilt in place
+
+
+# --------------------------------------- class 4: finite for every finite input (far away)
+
+def _strength_model():
+    """A certified 2-D model of two components (A_k = -diag(1, 2), -diag(2, 1)), without and
+    with a two-component strength factor over (x, log v), built from arrays."""
+    from seds_casadi import StableDS
+    from seds_casadi.core.strength import StrengthFactor
+
+    target = np.array([0.5, -0.2])
+    mus = np.array([[1.0, 0.5], [-0.5, 1.5]])
+    As = [-np.diag([1.0, 2.0]), -np.diag([2.0, 1.0])]
+    means, covs = [], []
+    for mu, A, sx in zip(mus, As, (0.3, 0.5)):
+        Sx = sx ** 2 * np.eye(2)
+        means.append(np.r_[mu, A @ (mu - target)])
+        covs.append(np.block([[Sx, Sx @ A.T], [A @ Sx, A @ Sx @ A.T + 1e-3 * np.eye(2)]]))
+    sf_means = np.array([[1.0, 0.5, np.log(0.8)], [-0.5, 1.5, np.log(0.3)]])
+    sf_covs = np.array([[[0.09, 0.0, 0.02], [0.0, 0.09, -0.01], [0.02, -0.01, 0.05]],
+                        [[0.25, 0.05, 0.0], [0.05, 0.25, 0.03], [0.0, 0.03, 0.08]]])
+    strength = StrengthFactor([0.6, 0.4], sf_means, sf_covs, log_range=(np.log(0.2), np.log(1.0)))
+    plain = StableDS([0.5, 0.5], means, covs, target)
+    with_v = StableDS([0.5, 0.5], means, covs, target, strength=strength, strength_radius=0.05)
+    return plain, with_v
+
+
+_FINITE = st.floats(min_value=-1.7e308, max_value=1.7e308, allow_nan=False)
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.lists(_FINITE, min_size=2, max_size=2), st.sampled_from([1.0, 1e-150, 1e150]))
+def test_the_strength_model_is_finite_for_every_finite_point(xy, scale):
+    """v(x), f_v(x) and Eq. 8's h(x) are finite everywhere: NaN came from |x| ~ 1e155 on
+    (inf - inf in the Gaussians' exponents, rho = inf / inf)."""
+    plain, model = _MODELS
+    with np.errstate(over="ignore"):
+        x = np.clip(np.asarray(xy) * scale, -1.7e308, 1.7e308)
+    v = model.strength(x)
+    assert np.isfinite(v) and 0.1 - 1e-12 <= v <= 2.0 + 1e-12  # half the slowest, twice the fastest
+    f = model.predict(x)
+    assert np.all(np.isfinite(f)) and np.linalg.norm(f) <= v * (1 + 1e-9)
+    h = _FIELD(x)
+    assert np.all(np.isfinite(h)) and abs(np.linalg.norm(h) - 1) < 1e-9
+    if np.max(np.abs(x - model.target)) > 1e-6:  # f_v points along f (the same streamlines)
+        g = plain.predict(x)
+        if np.all(np.isfinite(g)) and np.max(np.abs(g)) > 0:
+            g = g / np.max(np.abs(g))
+            cos = np.dot(f, g) / (np.linalg.norm(f) * np.linalg.norm(g))
+            assert cos > 1 - 1e-9
+
+
+def test_the_far_rule_leaves_the_model_unchanged_near_the_data_and_is_continuous():
+    """Within 1e6 times the data's extent: the numpy oracle of Eq. 12 and of f_v; beyond it the
+    value at the pulled-back point, which joins it continuously."""
+    from oracles import strength_factor, strength_model_velocity
+
+    _, model = _MODELS
+    sf = model.strength
+    X = np.random.default_rng(3).normal(size=(200, 2)) * np.array([[1.0], [30.0]]).repeat(100, 0)
+    np.testing.assert_allclose(model.strength(X), strength_factor(
+        X, sf.priors, sf.means, sf.covariances, sf.log_range), rtol=1e-12)
+    np.testing.assert_allclose(model.predict(X), strength_model_velocity(X, model),
+                               rtol=1e-9, atol=1e-12)
+    u = np.array([0.6, -0.8])
+    for r in (1e5, 1e7, 1e100, 1e300):  # along a ray the value settles (x* is 0.5 off the ray)
+        np.testing.assert_allclose(model.predict(u * r), model.predict(u * 1e7), rtol=1e-4)
+
+
+def test_a_rollout_from_far_away_runs_or_says_it_overflows():
+    """A strength model moves at most twice its fastest speed: from 1e300 it runs (finite
+    distances in its warning); a plain model whose velocity overflows (at 1.7e308) stops with a
+    message that says so (it failed with "x0 contains NaN or infinite values")."""
+    from seds_casadi.core.errors import ConvergenceWarning
+
+    _, model = _MODELS
+    with pytest.warns(ConvergenceWarning, match=r"did not reach the target .* 1\.41e\+300 away"):
+        path = model.rollout(np.array([1e300, 1e300]), dt=0.01, max_steps=5)
+    assert path.shape == (6, 2) and np.all(np.isfinite(path))
+    plain, _ = _MODELS
+    with pytest.raises(ValueError, match=r"start\(s\) \[1\] left the range of floating-point"):
+        plain.rollout(np.array([[1.0, 1.0], [1.7e308, -1.7e308]]), dt=0.01, max_steps=5,
+                      warn=False)
+
+
+def _field():
+    from seds_casadi.motion.target_field import TargetField
+
+    return TargetField(_MODELS[0])
+
+
+_MODELS = _strength_model()
+_FIELD = _field()

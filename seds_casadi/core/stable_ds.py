@@ -60,6 +60,26 @@ _TINY = 1e-200
 _STABLE_STEP = {"euler": 2.0, "rk4": 2.78}
 
 
+def _distances(E: np.ndarray) -> np.ndarray:
+    """Euclidean norm of each row, without overflow for rows beyond 1e154."""
+    scale = np.max(np.abs(E), axis=1, keepdims=True)
+    scale = np.where(scale > 0, scale, 1.0)
+    with np.errstate(over="ignore"):  # inf only beyond the largest float
+        return scale[:, 0] * np.linalg.norm(E / scale, axis=1)
+
+
+def _finite(X: np.ndarray, starts: np.ndarray, step: int) -> np.ndarray:
+    """``X`` if every entry is finite; else a ValueError naming the starts whose state left the
+    floating-point range."""
+    bad = ~np.all(np.isfinite(X), axis=1)
+    if bad.any():
+        raise ValueError(
+            f"the rollout from start(s) {starts[bad][:10].tolist()} left the range of "
+            f"floating-point numbers at step {step} (the velocity there overflows): start "
+            "nearer the target or use a smaller dt")
+    return X
+
+
 def certify(
     priors: np.ndarray,
     means: np.ndarray,
@@ -315,7 +335,7 @@ class StableDS(CachedFunctionMixin):
                 f"{rate:.3g}/s; stable only for dt < {_STABLE_STEP[method] / rate:.3g} s): "
                 "the rollout may oscillate or diverge. Use a smaller dt, method='rk4', or fit "
                 "with SEDS(gain_limit=...)", ConvergenceWarning, stacklevel=2)
-        dist0 = np.linalg.norm(X - self.target, axis=1)
+        dist0 = _distances(X - self.target)
         if tol is None:
             tol = 1e-3 * max(float(dist0.max()), 1e-12)
         traj = [X.copy()]
@@ -327,24 +347,25 @@ class StableDS(CachedFunctionMixin):
                 break
             a = ~done
             xa = x[a]
-            if method == "euler":
-                xa = xa + dt * self.predict(xa)
-            else:
-                k1 = self.predict(xa)
-                k2 = self.predict(xa + 0.5 * dt * k1)
-                k3 = self.predict(xa + 0.5 * dt * k2)
-                k4 = self.predict(xa + dt * k3)
-                xa = xa + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+            with np.errstate(over="ignore", invalid="ignore"):
+                if method == "euler":
+                    xa = xa + dt * self.predict(xa)
+                else:
+                    k1 = self.predict(xa)
+                    k2 = self.predict(_finite(xa + 0.5 * dt * k1, np.flatnonzero(a), step))
+                    k3 = self.predict(_finite(xa + 0.5 * dt * k2, np.flatnonzero(a), step))
+                    k4 = self.predict(_finite(xa + dt * k3, np.flatnonzero(a), step))
+                    xa = xa + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
             x = x.copy()
-            x[a] = xa
+            x[a] = _finite(xa, np.flatnonzero(a), step)
             traj.append(x)
-            newly = a & (np.linalg.norm(x - self.target, axis=1) < tol)
+            newly = a & (_distances(x - self.target) < tol)
             end[newly] = step
             done |= newly
         T = np.stack(traj)
         outs = [T[: (e if e >= 0 else len(T) - 1) + 1, i] for i, e in enumerate(end)]
         info = {"converged": end >= 0, "steps": np.where(end >= 0, end, len(T) - 1),
-                "final_distance": np.linalg.norm(x - self.target, axis=1)}
+                "final_distance": _distances(x - self.target)}
         if warn and not info["converged"].all():
             bad = np.flatnonzero(~info["converged"])
             warnings.warn(
@@ -367,7 +388,17 @@ class StableDS(CachedFunctionMixin):
         e2 = ca.sumsqr(x - ca.DM(self.target))
         rho = ca.sqrt(e2 / (e2 + self.strength_radius ** 2))
         nf = ca.norm_2(f)
-        return (self.strength.sx(x) * rho / ca.fmax(nf, _TINY)) * f
+        near = (self.strength.sx(x) * rho / ca.fmax(nf, _TINY)) * f
+        # beyond the far radius of gains_velocity_sx the weights are those at the pulled-back
+        # point y and f is linear in x - x*, so f(y) has f(x)'s direction without its overflow
+        # (||f(x)||^2 and ||x - x*||^2 overflow from about 1e154: inf / inf); rho is 1 there to
+        # 1e-12
+        R = self._far_radius()
+        e = x - ca.DM(self.target)
+        far = ca.mmax(ca.fabs(e))
+        fy = self.gains_velocity_sx(ca.DM(self.target) + (R / ca.fmax(far, R)) * e)
+        far_v = (self.strength.sx(x) / ca.fmax(ca.norm_2(fy), _TINY)) * fy
+        return ca.if_else(far > R, far_v, near)
 
     def gains_velocity_sx(self, x) -> ca.SX:
         """Eq. 5 as an SX expression of a symbolic point x (shape (d, 1)): the one definition.

@@ -15,6 +15,12 @@ extrapolates linearly, so outside the demonstrated range of log-speeds [lo, hi] 
 saturated smoothly (C1, ``hi + log2 tanh((g - hi) / log2)`` above, likewise below): v stays
 between half the slowest and twice the fastest demonstrated speed, and is exactly the GMR of
 Eq. 12 (in log v) inside the range.
+
+Far from the data (beyond :data:`FAR_FACTOR` times its extent) the GMR is evaluated at the point
+pulled radially back to that distance, as :meth:`StableDS.gains_velocity_sx` does for Eq. 6: the
+Gaussians' exponents overflow from about 1e154 times the components' spread (inf - inf, NaN),
+while v there is already saturated or constant along the ray. So v is finite and positive for
+every finite x, and unchanged within that distance.
 """
 
 from __future__ import annotations
@@ -42,6 +48,49 @@ def as_points(X, d: int, name: str = "X") -> tuple[np.ndarray, bool]:
     return X2, single
 
 _LOG2 = float(np.log(2.0))
+#: beyond this many times the data's extent the GMR is evaluated at that distance
+#: (:func:`strength_sx`; the same rule as :data:`seds_casadi.core.stable_ds.FAR_FACTOR`)
+FAR_FACTOR = 1e6
+
+
+def pull_back_sx(x, centre: np.ndarray, radius: float) -> ca.SX:
+    """``x`` itself within max-norm distance ``radius`` of ``centre``; beyond it, the point
+    pulled radially back to that distance (no overflow, no 0/0).
+
+    Parameters
+    ----------
+    x : casadi.SX, shape (d, 1)
+    centre : array, shape (d,)
+    radius : float, > 0
+
+    Returns
+    -------
+    casadi.SX, shape (d, 1)
+    """
+    c = ca.DM(np.asarray(centre, dtype=float))
+    e = x - c
+    far = ca.mmax(ca.fabs(e))
+    return ca.if_else(far > radius, c + (radius / ca.fmax(far, radius)) * e, x)
+
+
+def far_radius(means: np.ndarray, covariances: np.ndarray) -> tuple[np.ndarray, float]:
+    """Centre of a GMM's means and :data:`FAR_FACTOR` times its extent (the largest distance of
+    a mean from that centre plus the component's standard deviation).
+
+    Parameters
+    ----------
+    means : array, shape (K, d)
+    covariances : array, shape (K, d, d)
+
+    Returns
+    -------
+    centre : array, shape (d,)
+    radius : float
+    """
+    centre = np.mean(means, axis=0)
+    ext = max(float(np.linalg.norm(m - centre) + np.sqrt(max(np.trace(S), 0.0)))
+              for m, S in zip(means, covariances))
+    return centre, FAR_FACTOR * max(ext, 1e-300)
 
 
 def saturate_sx(g, log_range) -> ca.SX:
@@ -56,7 +105,8 @@ def saturate_sx(g, log_range) -> ca.SX:
 
 
 def strength_sx(x, priors, means, covariances, log_range=(-np.inf, np.inf)) -> ca.SX:
-    """Eq. 12 (in log v, saturated) as SX: v(x) = exp(sat(E[log v | x])).
+    """Eq. 12 (in log v, saturated) as SX: v(x) = exp(sat(E[log v | x])), finite for every
+    finite x (beyond :data:`FAR_FACTOR` times the data's extent, taken at that distance).
 
     Parameters
     ----------
@@ -70,8 +120,10 @@ def strength_sx(x, priors, means, covariances, log_range=(-np.inf, np.inf)) -> c
     -------
     casadi.SX, scalar
     """
-    d = np.shape(means)[1] - 1
-    logv = gmr_sx(x, priors, means, covariances, np.arange(d), [d])
+    means, covariances = np.asarray(means, dtype=float), np.asarray(covariances, dtype=float)
+    d = means.shape[1] - 1
+    centre, radius = far_radius(means[:, :d], covariances[:, :d, :d])
+    logv = gmr_sx(pull_back_sx(x, centre, radius), priors, means, covariances, np.arange(d), [d])
     return ca.exp(saturate_sx(logv, log_range))
 
 

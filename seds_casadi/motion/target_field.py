@@ -60,8 +60,11 @@ def target_field_sx(y, ds: StableDS, hitting_direction) -> tuple[ca.SX, ca.SX]:
         The target field and the velocity it normalises (:func:`certified_velocity_sx`).
     """
     f = certified_velocity_sx(y, ds)
-    nf = ca.norm_2(f)
-    h = ca.if_else(nf > TINY, f / ca.fmax(nf, TINY), ca.DM(np.asarray(hitting_direction, float)))
+    # ||f||^2 overflows from |f| ~ 1e154 (far from the data): normalise by max |f_i| first there
+    big = ca.mmax(ca.fabs(f))
+    g = ca.if_else(big > 1e100, f / ca.fmax(big, 1e100), f)
+    ng = ca.norm_2(g)
+    h = ca.if_else(ng > TINY, g / ca.fmax(ng, TINY), ca.DM(np.asarray(hitting_direction, float)))
     return h, f
 
 
