@@ -6,8 +6,9 @@ whose green differs from the field the robot was taught on, GPR and GMR.
 Runs ``seds-casadi play --field F --world W --adapt N --validate 0`` (the API, the same code)
 for the shipped worlds (``fields/worlds``), ``--world exudyn``, the nominal field itself (no
 regression) and two worlds written here that the green's model cannot describe exactly
-(taller hills on double hill, a rough flat green at stimp 8: not tuned for), and prints a
-table. Takes about 3 minutes per world on 2 cores.
+(taller hills on double hill, a rough flat green at stimp 8: not tuned for), and, from
+nothing, arctan played by a robot taught on a flat guess of its course; prints the success
+after 0, 1, 2, 5, 10, 20 and N shots and a table. Takes about 3 minutes per world on 2 cores.
 """
 
 from __future__ import annotations
@@ -56,6 +57,9 @@ def main() -> None:
          "untuned: hills 30 % taller"),
         ("rough_flat", _world("rough_flat", "rough_flat_stimp8", a.out, stimp=8),
          "untuned: rough flat at stimp 8"),
+        (_world("arctan", "arctan_flat_guess", a.out,
+                surface={"shape": "plane", "slope_x": 0.0, "slope_y": 0.0}),
+         os.path.join(FIELDS_FOLDER, "arctan.json"), "from nothing: taught on a flat guess"),
     ]
     rows = []
     for field, world, what in cases:
@@ -65,13 +69,19 @@ def main() -> None:
         t = time.perf_counter()
         res = play(field=field, world=world, adapt=a.adapt, shots=a.shots, validate_shots=0,
                    out=os.path.join(a.out, f"{field}_{label}"), progress=False)
-        before = {m: sum(r["sunk"] for r in res["all_rows"]
-                         if r["method"] == m and r["phase"] == "test" and r["adapt_shots"] == 0)
-                  / a.shots for m in ("gpr", "gmr")}
+        tests = [r for r in res["all_rows"] if r["phase"] == "test"]
+        curve = {m: {k: sum(r["sunk"] for r in tests
+                            if r["method"] == m and r["adapt_shots"] == k) / a.shots
+                     for k in sorted({r["adapt_shots"] for r in tests})} for m in ("gpr", "gmr")}
+        before = {m: curve[m][0] for m in curve}
+        field = os.path.basename(field).removesuffix(".json")
         rows.append((field, label, what, before, res["success"], time.perf_counter() - t))
         print(f"{field:12s} {label:22s} {what:36s} before gpr {before['gpr']:.2f} gmr "
               f"{before['gmr']:.2f} | after {a.adapt}: gpr {res['success']['gpr']:.2f} gmr "
               f"{res['success']['gmr']:.2f} ({rows[-1][-1]:.0f} s)", flush=True)
+        for m in curve:
+            print(f"    {m} sunk after k adaptation shots: "
+                  + ", ".join(f"{k}: {v:.2f}" for k, v in curve[m].items()), flush=True)
     print(f"\n| field | world | before GPR | before GMR | after {a.adapt} GPR | after GMR |")
     print("|---|---|---|---|---|---|")
     for field, label, what, b, f, _ in rows:

@@ -43,8 +43,9 @@ def test_play_quick_writes_shots_summary_figures_and_models(quick_run):
                             "alpha_deg", "kappa", "hit", "sunk", "direction_error_deg",
                             "speed_error", "launch_direction_error_deg", "within_limits",
                             "final_x_m", "final_y_m", "sunk_exudyn", "strategy", "miss",
-                            "miss_reason")
+                            "miss_reason", "phase", "adapt_shots")
     assert {row["method"] for row in rows} == {"gpr", "gmr"} and len(rows) == 6
+    assert {(row["phase"], row["adapt_shots"]) for row in rows} == {("test", "0")}
     for row in rows:
         assert row["hit"] in ("True", "False") and row["sunk"] in ("True", "False")
         assert -0.45 <= float(row["ball_y_m"]) <= 0.45

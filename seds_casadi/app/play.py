@@ -457,26 +457,28 @@ def _play(cfg: PlayConfig, fld, ex, started: float, world: World | None = None) 
     rows = _play_round(cfg, played, shots, ex, world.engine)
     times["round (robot + ball model)" if world.engine == "ball"
           else "round (robot in exudyn)"] = time.perf_counter() - t3
-    adaptations, before = None, None
+    adaptations, before, curve = None, None, []
     if cfg.adapt:
         before = rows
-        for r in before:
-            r["adapt_shots"] = 0
         t = time.perf_counter()
-        adaptations, adapt_rows = _adapt(cfg, scene, world, fitted, data)
+        marks = _checkpoints(cfg.adapt) if world.engine == "ball" else [cfg.adapt]
+        adaptations, adapt_rows = _adapt(cfg, scene, world, fitted, data, marks)
         times["adaptation"] = time.perf_counter() - t
         t = time.perf_counter()
-        shots = _round_shots(data, {m: a.model for m, a in adaptations.items()}, balls, holes)
-        rows = _play_round(cfg, played, shots, ex, world.engine)
-        for r in rows:
-            r["adapt_shots"] = cfg.adapt
-        times["round after the correction"] = time.perf_counter() - t
+        for k in marks:   # the round with the models corrected after k shots
+            shots = _round_shots(data, {m: a.snapshots[k] for m, a in adaptations.items()},
+                                 balls, holes)
+            rows = _play_round(cfg, played, shots, ex, world.engine)
+            for r in rows:
+                r["adapt_shots"] = k
+            curve += rows
+        times["rounds after the correction"] = time.perf_counter() - t
     if cfg.validate_shots > 0 and world.engine == "ball":
         t4 = time.perf_counter()
         _LOG.info("checking %d shots again in exudyn ...", cfg.validate_shots)
         _check_in_exudyn(cfg, played, shots, rows)
         times["exudyn validation"] = time.perf_counter() - t4
-    all_rows = rows if before is None else adapt_rows + before + rows
+    all_rows = rows if before is None else adapt_rows + before + curve
     rates = _write_outputs(cfg, scene, (data, fitted, strategies), shots, rows,
                            len(balls), times, started, all_rows=all_rows,
                            adaptation=(world, adaptations, before))
@@ -484,14 +486,24 @@ def _play(cfg: PlayConfig, fld, ex, started: float, world: World | None = None) 
             "adaptations": adaptations}
 
 
-def _adapt(cfg: PlayConfig, scene: Scene, world: World, fitted: dict, data):
+def _checkpoints(n: int) -> list[int]:
+    """The numbers of adaptation shots after which the round is played (for the learning
+    curve of ``adaptation.png``): 1, 2, 5, 10, 20, 30, 50, 100, ... below ``n``, and ``n``."""
+    marks = [k for k in (1, 2, 5, 10, 20, 30, 50) if k < n]
+    marks += [k for k in range(100, n, 100)]
+    return marks + [n]
+
+
+def _adapt(cfg: PlayConfig, scene: Scene, world: World, fitted: dict, data,
+           marks: list[int]):
     """Each learner's model corrected from ``cfg.adapt`` shots on the world
-    (:func:`~seds_casadi.game.adapt.adapt`); the adaptation shots as rows (phase "adapt")."""
+    (:func:`~seds_casadi.game.adapt.adapt`, the models after ``marks`` shots kept); the
+    adaptation shots as rows (phase "adapt")."""
     adaptations, rows = {}, []
     for m, model in fitted.items():
         _LOG.info("%s: %d adaptation shots on %s ...", m, cfg.adapt, world.label)
         a = adapt(scene, world, model, data, cfg.adapt, rng=np.random.default_rng(cfg.seed + 1),
-                  method=m, progress=_LOG.info if cfg.progress else None)
+                  method=m, progress=_LOG.info if cfg.progress else None, snapshots=marks)
         adaptations[m] = a
         _LOG.info("%s: %d of %d adaptation shots sunk; the green estimated: %s", m,
                   int(a.sunk.sum()), cfg.adapt, a.green.describe() if a.green else "nominal")
@@ -520,7 +532,8 @@ def _write_outputs(cfg: PlayConfig, scene: Scene, learned: tuple, shots: list[Sh
         strategy_figure(fld, strategies, rows, cfg.learners[0], cfg.out)
     world, adaptations, before = adaptation or (None, None, None)
     if adaptations:
-        adaptation_figure(fld, adaptations, before, rows, cfg.out)
+        adaptation_figure(fld, adaptations, [r for r in all_rows if r["phase"] == "test"],
+                          cfg.out)
     times["figures"] = time.perf_counter() - t
     if cfg.replay:
         t = time.perf_counter()

@@ -132,29 +132,34 @@ def strategy_figure(fld, strategies, rows, learner: str, out: str) -> None:
     save_figure(fig, os.path.join(out, "strategies.png"))
 
 
-def adaptation_figure(fld, adaptations: dict, before: list[dict], after: list[dict],
-                      out: str) -> None:
-    """``adaptation.png``: each adaptation shot's distance from the hole (sunk: 0) with the
-    test round's success before and after the correction, the green's parameters as the robot
-    estimated them shot after shot, and the learned correction of the first learner over the
-    situations (:mod:`seds_casadi.game.adapt`)."""
+def adaptation_figure(fld, adaptations: dict, tests: list[dict], out: str) -> None:
+    """``adaptation.png``: the round's success against the adaptation shots learned from
+    (``tests``: the round's rows, ``adapt_shots`` each) with each adaptation shot's distance
+    from the hole, the green's parameters as the robot estimated them shot after shot, and the
+    learned correction of the first learner over the situations
+    (:mod:`seds_casadi.game.adapt`)."""
     plt = pyplot()
-    fig, axs = plt.subplots(1, 3, figsize=(15, 4.4))
+    fig, axs = plt.subplots(1, 3, figsize=(15.5, 4.6))
     ax = axs[0]
-    for m, a in adaptations.items():
+    ax_d = ax.twinx()
+    for j, (m, a) in enumerate(adaptations.items()):
+        colour = f"C{j}"
+        ks = sorted({r["adapt_shots"] for r in tests if r["method"] == m})
+        rate = [100 * np.mean([r["sunk"] for r in tests
+                               if r["method"] == m and r["adapt_shots"] == k]) for k in ks]
+        ax.plot(ks, rate, "o-", color=colour, lw=2, label=f"{m}: round sunk [%]")
         n = np.arange(1, len(a.steps) + 1)
-        line, = ax.plot(n, a.miss_distance, "o-", ms=4, lw=1, label=f"{m}: miss distance")
-        ax.plot(n[a.sunk], a.miss_distance[a.sunk], "*", ms=10, color=line.get_color())
-        b = np.mean([r["sunk"] for r in before if r["method"] == m])
-        f = np.mean([r["sunk"] for r in after if r["method"] == m])
-        ax.annotate(f"{m}: test {b:.0%} -> {f:.0%} sunk", xy=(0.98, 0.95 - 0.08 * len(
-            ax.texts)), xycoords="axes fraction", ha="right", va="top", fontsize=9,
-            color=line.get_color())
-    ax.set_xlabel("adaptation shot (stars: sunk)")
-    ax.set_ylabel("distance of the ball from the hole [m]")
-    ax.set_title("the shots of the budget", fontsize=10)
+        ax_d.plot(n, a.miss_distance, ".:", color=colour, ms=5, lw=0.8,
+                  label=f"{m}: adaptation shot's miss [m]")
+    ax.set_ylim(-3, 103)
+    ax.set_xlabel("adaptation shots learned from")
+    ax.set_ylabel("round sunk [%]")
+    ax_d.set_ylabel("adaptation shot: distance from the hole [m] (0: sunk)")
+    h1, l1 = ax.get_legend_handles_labels()
+    h2, l2 = ax_d.get_legend_handles_labels()
+    ax.legend(h1 + h2, l1 + l2, fontsize=8, loc="center right")
+    ax.set_title("success and misses against the adaptation shots", fontsize=10)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="center right")
     ax = axs[1]
     first = next(iter(adaptations.values()))
     Q = np.array([s.green for s in first.steps]).reshape(-1, 5)

@@ -324,16 +324,17 @@ def estimate_green(green: Green, observations: list[Observation], last: int = 6)
     def fun(z):
         return Green(green.nominal, green.stroke, z * scale).residuals(obs)
 
-    # from the last estimate and from the nominal green: a tilt along the line of play and
-    # a rolling resistance both slow the ball down, and a first estimate can take the one
-    # for the other; the better fit of the two is kept
+    # from the last estimate and, unless that fits the paths within the camera's noise, from
+    # the nominal green too: a tilt along the line of play and a rolling resistance both slow
+    # the ball down, and a first estimate can take the one for the other; the better fit of
+    # the two is kept
     best = None
     for start in (green.q / scale, np.zeros_like(green.q)):
         sol = least_squares(fun, start, method="trf", diff_step=1e-3, x_scale=1.0,
                             max_nfev=20, xtol=1e-3, ftol=1e-3)
         if best is None or sol.cost < best.cost:
             best = sol
-        if not np.any(green.q):
+        if not np.any(green.q) or 2 * best.cost / len(best.fun) < 4.0:
             break
     sol = best
     return Green(green.nominal, green.stroke, sol.x * scale)
@@ -428,12 +429,15 @@ class AdaptationStep:
 
 @dataclass
 class Adaptation:
-    """The outcome of :func:`adapt`: the corrected model, the estimated green and the shots."""
+    """The outcome of :func:`adapt`: the corrected model, the estimated green, the shots, and
+    the corrected models after the numbers of shots asked for (``snapshots``: shots -> model;
+    0: the taught model)."""
 
     model: CorrectedModel
     world: World
     green: Green | None = None
     steps: list[AdaptationStep] = field(default_factory=list)
+    snapshots: dict = field(default_factory=dict)
 
     @property
     def sunk(self) -> np.ndarray:
@@ -538,7 +542,7 @@ def matching_shots(green: Green, balls, holes, alphas, kappas, iterations: int =
 
 def adapt(scene: Scene, world: World, base, data: HittingDataset, budget: int,
           rng: np.random.Generator | None = None, method: str = "", progress=None,
-          n_candidates: int = 256, n_teach: int = 24) -> Adaptation:
+          n_candidates: int = 256, n_teach: int = 24, snapshots=()) -> Adaptation:
     """Correct a taught hitting-parameter model from at most ``budget`` shots on the world
     (module docstring).
 
@@ -565,6 +569,9 @@ def adapt(scene: Scene, world: World, base, data: HittingDataset, budget: int,
         Situations drawn from the field's declaration to choose the shots from.
     n_teach : int
         Situations of the data set (equally spaced) the correction is learned on.
+    snapshots : iterable of int
+        Numbers of shots after which the corrected model is kept as well (in
+        :attr:`Adaptation.snapshots`; for learning curves).
 
     Returns
     -------
@@ -576,6 +583,9 @@ def adapt(scene: Scene, world: World, base, data: HittingDataset, budget: int,
     fixed = float(data.kappa[0]) if data.strategy == "fixed_speed" else None
     model = CorrectedModel(base, fixed)
     out = Adaptation(model, world)
+    keep = sorted({int(k) for k in snapshots if 0 <= int(k) < int(budget)})
+    if 0 in keep:
+        out.snapshots[0] = CorrectedModel(base, fixed)
     if int(budget) == 0:
         return out
     stroke = scene.stroke if scene.launch_table is not None else data.stroke
@@ -604,11 +614,23 @@ def adapt(scene: Scene, world: World, base, data: HittingDataset, budget: int,
             green = estimate_green(green, observations)
         miss = 0.0 if res.sunk else float(np.linalg.norm(res.final_position - hole))
         out.steps.append(AdaptationStep(res, green.q.copy(), miss))
+        if k + 1 in keep:
+            out.snapshots[k + 1] = _learn_correction(CorrectedModel(base, fixed), green, data,
+                                                     n_teach)
         if progress is not None:
             progress(f"adaptation shot {k + 1}/{budget} ({method}): "
                      + ("sunk" if res.sunk else res.reason) + f"; green: {green.describe()}")
-    # the correction learned over the situations: the teacher's good shots moved onto the
-    # estimated green, at n_teach of the data set's situations
+    _learn_correction(model, green, data, n_teach)
+    out.green = green
+    out.snapshots[int(budget)] = model
+    return out
+
+
+def _learn_correction(model: CorrectedModel, green: Green, data: HittingDataset,
+                      n_teach: int) -> CorrectedModel:
+    """The correction over the situations: the teacher's good shots at ``n_teach`` of the data
+    set's situations (equally spaced) moved onto the estimated green (:func:`matching_shots`),
+    learned by the model's GPR; returns ``model``."""
     idx = np.unique(np.linspace(0, len(data) - 1, min(int(n_teach), len(data))).round()
                     .astype(int))
     A1, K1, ok = matching_shots(green, data.ball[idx], data.hole[idx], data.alpha[idx],
@@ -616,5 +638,4 @@ def adapt(scene: Scene, world: World, base, data: HittingDataset, budget: int,
     C = np.column_stack([np.rad2deg(A1 - data.alpha[idx]), np.log(K1 / data.kappa[idx])])
     if ok.any():
         model.fit_correction(data.situations[idx][ok], C[ok])
-    out.green = green
-    return out
+    return model
