@@ -189,6 +189,12 @@ def test_situations_without_a_good_shot_are_named_with_what_to_change():
     assert err.value.holes[:, 0].min() > 1.5  # the near holes were taught
     ds = t.collect(b, h, missing="drop")
     assert ds.dropped == len(err.value.holes) and len(ds) + ds.dropped == 8
+    # with more situations the 8 farthest from the centre are probed before the search: the
+    # far end of the slider is refused without teaching the 12 others first
+    b, h = paper_situations(f, 20)
+    with pytest.raises(TeachingError, match=r"for \d of 8 situations at the edge of those "
+                       r"declared \(probed before the search\) on flat: .* hole \[2.9, 0.0\]"):
+        t.collect(b, h)
 
 
 def test_the_centre_strategy_is_more_robust_than_the_minimal_speed():

@@ -489,6 +489,8 @@ class Teacher:
         span = np.where(spread > 0, spread, 1.0)
         Z = (S - np.median(S, axis=0)) / span
         order = np.argsort(np.sum(Z * Z, axis=1), kind="stable")
+        if missing == "raise":
+            self._probe_edges(balls, holes, order)
         done: list[int] = []
         for i in progress_bar(order, progress, desc=f"teacher on {self.field.name}",
                               unit="situation", leave=False):
@@ -506,13 +508,34 @@ class Teacher:
                               out[ok, 0], out[ok, 1], self.stroke, dropped=int((~ok).sum()),
                               declared=self.field.situations.to_spec())
 
-    def _missing_error(self, balls, holes, n: int) -> TeachingError:
+    def _probe_edges(self, balls, holes, order, n: int = 8) -> None:
+        """Before the search: the ``n`` situations farthest from the centre (the last of
+        ``order``) must each have a successful hit somewhere on the search grid (a whole
+        success map without one, or no sinking angle at the fixed gain), else the
+        :class:`TeachingError` is raised now, in a second or two, not after the whole set."""
+        edge = [int(i) for i in order[::-1][:int(n)]]
+        bad = []
+        for i in edge:
+            if self.strategy == "fixed_speed":
+                ok = np.isfinite(self.good_shot(balls[i], holes[i])[0])
+            else:
+                ok = bool(self.map(balls[i], holes[i]).any())
+            if not ok:
+                bad.append(i)
+        if bad:
+            bad.sort()
+            raise self._missing_error(balls[bad], holes[bad], len(edge),
+                                      probed=len(edge) < len(balls))
+
+    def _missing_error(self, balls, holes, n: int, probed: bool = False) -> TeachingError:
         shown = "; ".join(f"ball {np.round(b, 3).tolist()} hole {np.round(h, 3).tolist()}"
                           for b, h in list(zip(balls, holes))[:8])
         more = f" and {len(balls) - 8} more" if len(balls) > 8 else ""
+        which = ("situations at the edge of those declared (probed before the search)"
+                 if probed else "situations")
         return TeachingError(
             f"the teacher ({self.describe()}) found no successful shot for {len(balls)} of {n} "
-            f"situations on {self.field.name}: {shown}{more}. Change the field file: widen the "
+            f"{which} on {self.field.name}: {shown}{more}. Change the field file: widen the "
             f"'teacher' entry's kappa_range or alpha_range, allow bank shots (\"banks\": true), "
             f"choose another strategy, or declare 'situations' that leave these out (a smaller "
             f"ball region or hole slider)", balls, holes)
