@@ -226,3 +226,121 @@ def _field():
 
 _MODELS = _strength_model()
 _FIELD = _field()
+
+
+# ------------------------------------------- class 6: values with no meaning are refused
+
+def test_boolean_demonstrations_are_refused():
+    from seds_casadi import Demonstrations
+
+    mask = np.array([[True, False], [False, True], [True, True], [False, False]])
+    with pytest.raises(TypeError, match=r"positions\[0\]: boolean values"):
+        Demonstrations([mask], dt=0.1)
+    with pytest.raises(TypeError, match=r"velocities\[0\]: boolean values"):
+        Demonstrations([mask.astype(float)], velocities=[mask])
+    with pytest.raises(TypeError, match="X: boolean values"):
+        Demonstrations.from_samples(mask, mask.astype(float))
+
+
+_CSV = "demo,t,x0,x1{v}\n" + "".join(
+    f"0,{t},{x},{x}{{v{i}}}\n" for i, (t, x) in enumerate([(0.0, 1.0), (0.1, 0.6), (0.2, 0.3),
+                                                            (0.3, 0.0)]))
+
+
+@pytest.mark.parametrize("velocities", [False, True])
+def test_a_csv_whose_rows_are_out_of_time_order_is_refused(tmp_path, velocities):
+    """With velocity columns the ``t`` column was never read: shuffled rows were fitted as
+    given (the direction objective's phase and the trimming read the row order)."""
+    from seds_casadi import load_demonstrations
+
+    vel = {f"v{i}": (",-4,-4" if velocities else "") for i in range(4)}
+    text = _CSV.format(v=",v0,v1" if velocities else "", **vel)
+    ok = tmp_path / "ok.csv"
+    ok.write_text(text)
+    assert load_demonstrations(ok).n_samples == 4
+    lines = text.splitlines()
+    lines[2], lines[3] = lines[3], lines[2]  # the samples at t = 0.1 and 0.2 swapped
+    bad = tmp_path / "shuffled.csv"
+    bad.write_text("\n".join(lines) + "\n")
+    with pytest.raises(ValueError, match=r"shuffled.csv: line 4: t = 0.1 does not come after "
+                                         r"t = 0.2 .* time order"):
+        load_demonstrations(bad)
+
+
+def _field_spec(**changes) -> dict:
+    import json
+
+    from seds_casadi.minigolf.fields import FIELDS_FOLDER
+
+    with open(os.path.join(FIELDS_FOLDER, "flat.json")) as fh:
+        spec = json.load(fh)
+    spec.update(changes)
+    return spec
+
+
+@pytest.mark.parametrize("surface, match", [
+    ({"shape": "plane", "slope_x": 1e6, "slope_y": 0.0}, r"rises 1e\+06 m per metre"),
+    ({"shape": "plane", "slope_x": 0.8, "slope_y": 0.8}, r"rises 1.13 m per metre"),
+    # steps 0.1 mm and 0.1 um wide, centred between the 1 cm grid's lines (the grid saw them
+    # nearly flat: 2 /m and 0.06 /m, against the ball's 47 /m)
+    ({"shape": "arctan", "height": 0.002, "steepness": 1e4, "y0": 0.005}, r"rises 12.7 m"),
+    ({"shape": "arctan", "height": 1e-5, "steepness": 1e7, "y0": 0.005}, r"rises 63.7 m"),
+    # a step 5 mm wide, gentle enough (slope 0.51) but curved 66 /m
+    ({"shape": "arctan", "height": 0.004, "steepness": 200, "y0": 0.005}, r"radius of 15.\d mm"),
+    ({"shape": "hills", "hills": [{"x": 1.005, "y": 0.005, "height": 1e-4, "width": 1e-4}]},
+     r"curves with a radius of 0.1 mm near \(1.005, 0.005\)"),
+    ({"shape": "rough", "amplitude": 1e-4, "width": 2e-4, "bumps": 30}, "curves with a radius"),
+])
+def test_surfaces_no_ball_can_roll_on_are_refused(surface, match):
+    """Slopes beyond 45 deg, and steps or bumps curved tighter than the ball however narrow:
+    the curvature check sampled a 1 cm grid (and a hill 0.1 mm wide made it allocate 47 GB)."""
+    from seds_casadi.minigolf.fields import Field
+
+    t0 = time.perf_counter()
+    with pytest.raises(ValueError, match=match):
+        Field.from_dict(_field_spec(name="steep", surface=surface), "steep.json")
+    assert time.perf_counter() - t0 < 3
+
+
+def test_the_shipped_fields_keep_their_extremes():
+    """The closed-form points add nothing where the grid already saw the extremes (arctan's
+    largest curvature is now exact: (2/pi) h s^2 3 sqrt(3) / 8)."""
+    from seds_casadi.minigolf.fields import load_field
+
+    arctan = load_field("arctan")
+    h, s = 0.05, 4.0
+    ext = arctan.surface.extremes(arctan.bounds)
+    assert ext["curvature"] == pytest.approx(2 / np.pi * h * s**2 * 3 * np.sqrt(3) / 8, rel=1e-9)
+    assert ext["slope"] == pytest.approx(2 / np.pi * h * s, rel=1e-9)
+    hills = load_field("double_hill").surface.extremes(load_field("double_hill").bounds)
+    assert 1.5 < hills["curvature"] < 2.0 and 0.1 < hills["slope"] < 0.2
+
+
+def test_a_field_with_two_surface_speeds_is_refused_and_errors_print_plain_numbers():
+    from seds_casadi.minigolf.fields import Field
+
+    with pytest.raises(ValueError, match=r"both 'stimp' \(10\) and 'rolling_resistance' "
+                                         r"\(0.07\) given"):
+        Field.from_dict(_field_spec(rolling_resistance=0.07), "two.json")
+    with pytest.raises(ValueError) as err:
+        Field.from_dict(_field_spec(hole={"x": 3.2, "y": 0.0}), "far.json")
+    assert str(err.value) == "far.json: hole at [3.2, 0] is outside the field [-0.3, 3, -0.6, 0.6]"
+    with pytest.raises(ValueError, match=r"ball_region \[-0.5, 0.3, -0.2, 0.2\] is not inside "
+                                         r"the bounds \[-0.3, 3, -0.6, 0.6\]$"):
+        Field.from_dict(_field_spec(ball_region=[-0.5, 0.3, -0.2, 0.2]), "region.json")
+
+
+@pytest.mark.parametrize("argv, match", [
+    (["play", "--replay", "0"], "argument --replay: must be at least 1, got 0"),
+    (["lasa", "--samples", "0"], "argument --samples: must be at least 2, got 0"),
+    (["lasa", "--samples", "x"], "argument --samples: expected a whole number, got 'x'"),
+])
+def test_counts_that_mean_nothing_are_refused_on_the_command_line(tmp_path, capsys, argv, match):
+    """``--replay 0`` wrote nothing, ``lasa --samples 0`` meant "all", silently."""
+    from seds_casadi.app.cli import main
+
+    with pytest.raises(SystemExit) as exc:
+        main([*argv, "--out", str(tmp_path / "out")])
+    assert exc.value.code == 2
+    assert match in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()

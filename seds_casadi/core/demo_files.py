@@ -5,7 +5,8 @@ optional ``vel_n`` of the same shapes, ``t_n`` of shape (T_n,), a scalar ``dt`` 
 shape (d,).
 
 ``.csv``: a header row, then one row per sample. Columns ``demo`` (an integer id; rows of one
-demonstration are contiguous and in time order), ``t`` (time stamp, seconds), ``x0 .. x{d-1}``
+demonstration are contiguous and in time order), ``t`` (time stamp, seconds; strictly increasing
+within a demonstration, checked also when velocities are given), ``x0 .. x{d-1}``
 (positions) and optionally ``v0 .. v{d-1}`` (velocities). Lines starting with ``#`` are comments.
 """
 
@@ -215,6 +216,7 @@ def _load_csv(path: str, kwargs: dict) -> Demonstrations:
         raise ValueError(f"{path}: the rows of demo {int(again)} are not contiguous; sort the "
                          "rows by demo, then by time")
     ends = np.r_[starts[1:], len(table)]
+    _check_times(path, table[:, header.index("t")], [line for line, _ in rows], starts, ends)
     pos = [table[s:e][:, xcols] for s, e in zip(starts, ends)]
     kw = dict(kwargs)
     if vcols:
@@ -222,6 +224,21 @@ def _load_csv(path: str, kwargs: dict) -> Demonstrations:
     else:
         kw.setdefault("times", [table[s:e, header.index("t")] for s, e in zip(starts, ends)])
     return _demonstrations(path, pos, kw)
+
+
+def _check_times(path: str, t: np.ndarray, lines: list[int], starts, ends) -> None:
+    """Each demonstration's ``t`` finite and strictly increasing, with or without velocity
+    columns (the rows are the samples in time order: shuffled rows would be fitted as given)."""
+    for s, e in zip(starts, ends):
+        bad = np.flatnonzero(~np.isfinite(t[s:e]))
+        if bad.size:
+            raise ValueError(f"{path}: line {lines[s + bad[0]]}: t is not a finite number")
+        back = np.flatnonzero(np.diff(t[s:e]) <= 0)
+        if back.size:
+            k = s + back[0] + 1
+            raise ValueError(f"{path}: line {lines[k]}: t = {t[k]:g} does not come after "
+                             f"t = {t[k - 1]:g} of the row before; the rows of a demonstration "
+                             "must be in time order (sort them by demo, then by t)")
 
 
 def save_demonstrations(path: str | os.PathLike, demos: Demonstrations) -> None:

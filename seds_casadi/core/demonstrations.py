@@ -23,6 +23,19 @@ from scipy.ndimage import uniform_filter1d
 MAX_MAGNITUDE = 1e100
 
 
+def _refuse_kind(kind: str, what: str) -> None:
+    """A TypeError for arrays that are not real numbers: complex, boolean (True/False are no
+    positions: a mask or a flag column passed by mistake), strings, dates."""
+    if kind == "c":
+        raise TypeError(f"{what}: complex values; demonstrations are real (give the real part "
+                        "explicitly if that is what you mean)")
+    if kind == "b":
+        raise TypeError(f"{what}: boolean values (True/False) are not positions or velocities; "
+                        "give numbers (convert with .astype(float) if that is what you mean)")
+    if kind in "USMm":
+        raise TypeError(f"{what}: not a numeric array (dtype kind {kind!r}); give numbers")
+
+
 def _as_demo_list(arrays, what: str) -> list[np.ndarray]:
     if isinstance(arrays, np.ndarray):
         if arrays.ndim == 2:
@@ -44,12 +57,7 @@ def _as_demo_list(arrays, what: str) -> list[np.ndarray]:
             kind = np.asarray(a).dtype.kind
         except (TypeError, ValueError):  # ragged: the conversion below says so
             kind = "O"
-        if kind == "c":
-            raise TypeError(f"{what}[{n}]: complex values; demonstrations are real (give the "
-                            "real part explicitly if that is what you mean)")
-        if kind in "USMm":
-            raise TypeError(f"{what}[{n}]: not a numeric array (dtype kind {kind!r}); give "
-                            "numbers")
+        _refuse_kind(kind, f"{what}[{n}]")
         try:
             a = np.asarray(a, dtype=float)
         except (TypeError, ValueError) as exc:
@@ -272,6 +280,12 @@ class Demonstrations:
             shifting). Its samples carry no phase, so the direction objective weights them
             uniformly (Eq. 11 needs the time order within each demonstration).
         """
+        for name, a in (("X", X), ("Xdot", Xdot)):
+            try:
+                kind = np.asarray(a).dtype.kind
+            except (TypeError, ValueError):  # ragged: the conversion below says so
+                kind = "O"
+            _refuse_kind(kind, name)
         X = np.asarray(X, dtype=float)
         V = np.asarray(Xdot, dtype=float)
         if X.ndim != 2 or X.shape[0] < 2 or X.shape[1] < 1:

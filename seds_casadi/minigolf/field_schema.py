@@ -19,7 +19,8 @@ import math
 
 from ..core._io import is_plain_name
 
-__all__ = ["check_field_spec", "did_you_mean", "FIELD_KEYS", "SURFACE_KEYS", "TEACHER_KEYS",
+__all__ = ["check_field_spec", "did_you_mean", "plain_numbers", "FIELD_KEYS", "SURFACE_KEYS",
+           "TEACHER_KEYS",
            "MAX_EXTENT", "MAX_HILLS", "MAX_BUMPS", "MAX_HEIGHTMAP_VALUES", "MAX_TABLE_POINTS",
            "MAX_BUMP_EVALUATIONS", "MAX_FILE_BYTES"]
 
@@ -54,6 +55,12 @@ def did_you_mean(name: str, valid) -> str:
     return f" (did you mean {close[0]!r}?)" if close else ""
 
 
+def plain_numbers(values) -> str:
+    """``values`` (a list, tuple or array of numbers) as a user reads them in a message:
+    ``[3.2, -0.5]`` (not ``[np.float64(3.2), ...]``), each number in ``%g`` form."""
+    return "[" + ", ".join(f"{float(v):g}" for v in values) + "]"
+
+
 def _known(d: dict, valid, where: str) -> None:
     for key in d:
         if key not in valid:
@@ -78,6 +85,10 @@ def check_field_spec(spec: dict, source: str) -> None:
         raise ValueError(f"{source}: a field is a JSON object, got {type(spec).__name__}")
     _known(spec, FIELD_KEYS, source)
     _numbers(spec, ("wall_restitution", "stimp", "rolling_resistance"), source)
+    if "stimp" in spec and "rolling_resistance" in spec:
+        raise ValueError(f"{source}: both 'stimp' ({spec['stimp']!r}) and 'rolling_resistance' "
+                         f"({spec['rolling_resistance']!r}) given; they set the same surface speed, "
+                         "keep one")
     if "name" in spec and not isinstance(spec["name"], str):
         raise ValueError(f"{source}: name: a text is needed, got {spec['name']!r}")
     if "name" in spec and not is_plain_name(spec["name"]):

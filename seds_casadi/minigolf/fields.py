@@ -75,7 +75,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core._io import data_folder, open_regular
-from .field_schema import MAX_FILE_BYTES, TEACHER_KEYS, check_field_spec, did_you_mean
+from .field_schema import MAX_FILE_BYTES, TEACHER_KEYS, check_field_spec, did_you_mean, plain_numbers
 from .situations import Situations
 from .surface import Surface
 
@@ -155,8 +155,8 @@ class Field:
         region = _box(spec["ball_region"], f"{source}: ball_region")
         if not (bounds[0] <= region[0] and region[1] <= bounds[1] and bounds[2] <= region[2]
                 and region[3] <= bounds[3]):
-            raise ValueError(f"{source}: ball_region {list(region)} is not inside the bounds "
-                             f"{list(bounds)}")
+            raise ValueError(f"{source}: ball_region {plain_numbers(region)} is not inside the "
+                             f"bounds {plain_numbers(bounds)}")
         boundary = spec.get("boundary", "walls")
         if boundary not in ("walls", "edges"):
             raise ValueError(f"{source}: boundary must be 'walls' or 'edges', got {boundary!r}")
@@ -170,7 +170,8 @@ class Field:
             raise ValueError(f"{source}: hole position and radius must be finite, radius > 0")
         if not (bounds[0] + hr <= hxy[0] <= bounds[1] - hr
                 and bounds[2] + hr <= hxy[1] <= bounds[3] - hr):
-            raise ValueError(f"{source}: hole at {list(hxy)} is outside the field {list(bounds)}")
+            raise ValueError(f"{source}: hole at {plain_numbers(hxy)} is outside the field "
+                             f"{plain_numbers(bounds)}")
         if "rolling_resistance" in spec:
             rho = float(spec["rolling_resistance"])
             if not (np.isfinite(rho) and rho >= 0):
@@ -186,7 +187,7 @@ class Field:
         if not 0 <= e <= 1:
             raise ValueError(f"{source}: wall_restitution must be in [0, 1], got {e}")
         try:
-            surface = Surface.from_spec(spec["surface"], list(bounds), f"{source}: surface")
+            surface = Surface.from_spec(spec["surface"], bounds.tolist(), f"{source}: surface")
             situations = Situations.from_spec(spec.get("situations"), hxy, region, bounds, hr,
                                               surface.shape, source)
         except (TypeError, KeyError, IndexError, AttributeError) as exc:
@@ -204,8 +205,8 @@ class Field:
         r = self.ball_region
         bad = ~((r[0] <= B[:, 0]) & (B[:, 0] <= r[1]) & (r[2] <= B[:, 1]) & (B[:, 1] <= r[3]))
         if bad.any():
-            raise ValueError(f"ball position {list(B[np.argmax(bad)])} is outside the field's "
-                             f"ball region {list(r)}")
+            raise ValueError(f"ball position {plain_numbers(B[np.argmax(bad)])} is outside the "
+                             f"field's ball region {plain_numbers(r)}")
         return B
 
 

@@ -14,8 +14,12 @@ import json
 import casadi as ca
 import numpy as np
 
+from .field_schema import plain_numbers
+
 #: the surface shapes a field file may use
 SHAPES = ("plane", "hills", "arctan", "rough", "heightmap")
+#: steepest slope |grad H| a field's surface may have (45 deg)
+MAX_SLOPE = 1.0
 #: extremes of the surfaces seen (shape, parameters, bounds) -> dict, see Surface.extremes
 _EXTREMES: dict = {}
 
@@ -87,7 +91,8 @@ def _check_heightmap(p: dict, bounds, where: str) -> None:
         raise ValueError(f"{where}.heights: contains NaN or infinite values")
     if (ext[0] > bounds[0] or ext[1] < bounds[1] or ext[2] > bounds[2]
             or ext[3] < bounds[3]):
-        raise ValueError(f"{where}.extent {ext} does not cover the field's bounds {bounds}")
+        raise ValueError(f"{where}.extent {plain_numbers(ext)} does not cover the field's bounds "
+                         f"{plain_numbers(bounds)}")
 
 
 _CHECKS = {"plane": _check_plane, "hills": _check_hills, "arctan": _check_arctan,
@@ -149,15 +154,22 @@ class Surface:
         return surface
 
     def _check_followable(self, bounds, where: str) -> None:
-        """Refuse a surface curved more tightly than the ball's radius: the ball (a sphere
-        touching at one point) cannot follow it, and the step would not stay finite."""
+        """Refuse a surface steeper than :data:`MAX_SLOPE` or curved more tightly than the ball's
+        radius: the ball (a sphere touching at one point) cannot follow it, and the step would
+        not stay finite. Both from :meth:`extremes`, which adds the points where an arctan's or
+        a bump's extremes lie in closed form to its grid."""
         from ..motion.golf import BALL_RADIUS
 
         ext = self.extremes(bounds)
+        if ext["slope"] > MAX_SLOPE:
+            raise ValueError(
+                f"{where}: the surface rises {ext['slope']:.3g} m per metre at its steepest, "
+                f"more than {MAX_SLOPE:g} (45 deg): a slope that steep is a wall, not a green the "
+                "ball model rolls on. Use gentler slopes (the shipped fields reach 0.17).")
         if ext["curvature"] * BALL_RADIUS > 1.0:
             x, y = ext["where"]
             raise ValueError(
-                f"{where}: the surface curves with a radius of {1e3 / ext['curvature']:.1f} mm"
+                f"{where}: the surface curves with a radius of {1e3 / ext['curvature']:.3g} mm"
                 f" near ({x:.3f}, {y:.3f}), tighter than the ball's radius "
                 f"({1e3 * BALL_RADIUS:.2f} mm): a ball cannot follow it. Smooth the surface "
                 "(smaller height differences between neighbouring points, wider bumps).")
@@ -179,7 +191,9 @@ class Surface:
         return g.sum(axis=1), grad, (hxx, np.sum(gw * dx * dy / w2, axis=1), hyy)
 
     def extremes(self, bounds, spacing: float = 0.01) -> dict:
-        """Largest |H| range, slope and curvature over ``bounds`` (sampled on a grid).
+        """Largest |H| range, slope and curvature over ``bounds`` (sampled on a grid, at most
+        ``spacing`` apart, finer for narrow hills and fine height maps, plus the points where an
+        arctan's or a bump's extremes lie in closed form).
 
         Returns a dict: ``height_range`` [m], ``slope`` (largest |grad H|), ``curvature``
         (largest spectral norm of Hess(H), 1/m; at least the surface's largest principal
@@ -189,9 +203,16 @@ class Surface:
                tuple(float(v) for v in bounds), float(spacing))
         if key in _EXTREMES:
             return _EXTREMES[key]
-        if self.shape == "hills":
-            spacing = min(spacing, float(np.min(self._w)) / 4)
         b = np.asarray(key[2])
+        # finer for narrow hills (4 samples a width) and fine height maps (2 a cell), at most
+        # 4 million points (the hills' centres are checked exactly below)
+        finest = np.sqrt(max((b[1] - b[0]) * (b[3] - b[2]), 1e-12) / 4e6)
+        if self.shape == "hills":
+            spacing = min(spacing, max(float(np.min(self._w)) / 4, finest))
+        if self.shape == "heightmap":
+            ext, Z = self.params["extent"], np.shape(self.params["heights"])
+            cell = min((ext[1] - ext[0]) / (Z[1] - 1), (ext[3] - ext[2]) / (Z[0] - 1))
+            spacing = min(spacing, max(cell / 2, finest))
         xs = np.linspace(b[0], b[1], max(4, int(np.ceil((b[1] - b[0]) / spacing)) + 1))
         ys = np.linspace(b[2], b[3], max(4, int(np.ceil((b[3] - b[2]) / spacing)) + 1))
         X, Y = np.meshgrid(xs, ys, indexing="ij")
@@ -207,10 +228,42 @@ class Surface:
             i = int(np.argmax(k))
             if k[i] > curv:
                 curv, at = float(k[i]), Q[i]
+        # and where the extremes are known in closed form (a grid misses a step or a bump
+        # narrower than its spacing): the arctan's steepest and most curved lines, the bumps'
+        # centres (each bump's largest curvature, |height| / width^2)
+        Q = self._critical_points(b)
+        if len(Q):
+            h, g, (hxx, hxy, hyy) = self._terms(Q)
+            lo, hi = min(lo, h.min()), max(hi, h.max())
+            slope = max(slope, float(np.sqrt(np.max(np.sum(g * g, axis=1)))))
+            k = np.abs(0.5 * (hxx + hyy)) + np.sqrt((0.5 * (hxx - hyy)) ** 2 + hxy**2)
+            i = int(np.argmax(k))
+            if k[i] > curv:
+                curv, at = float(k[i]), Q[i]
         out = dict(height_range=float(hi - lo), slope=slope, curvature=curv,
                    where=(float(at[0]), float(at[1])))
         _EXTREMES[key] = out
         return out
+
+    def _critical_points(self, b: np.ndarray) -> np.ndarray:
+        """Points of ``bounds`` ``b`` where the largest slope or curvature lies in closed form:
+        an arctan's centre line (steepest) and the lines u = y0 +- 1 / (sqrt(3) steepness)
+        (most curved: |H''| peaks there), clipped to the bounds; the bumps' centres inside them."""
+        if self.shape == "arctan":
+            p = self.params
+            axis = 1 if p.get("axis", "y") == "y" else 0
+            lo, hi = (b[2], b[3]) if axis == 1 else (b[0], b[1])
+            off = 1.0 / (np.sqrt(3.0) * float(p["steepness"]))
+            u = np.clip(float(p["y0"]) + np.array([0.0, -off, off]), lo, hi)
+            Q = np.zeros((3, 2))
+            Q[:, axis] = u
+            Q[:, 1 - axis] = b[0] if axis == 1 else b[2]
+            return Q
+        if self.shape in ("hills", "rough"):
+            c = self._c
+            inside = (c[:, 0] >= b[0]) & (c[:, 0] <= b[1]) & (c[:, 1] >= b[2]) & (c[:, 1] <= b[3])
+            return c[inside]
+        return np.zeros((0, 2))
 
     # ---------------------------------------------------------------- evaluation
     def _gauss(self, P):
