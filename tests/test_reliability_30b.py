@@ -12,6 +12,7 @@ test fails on the code before its fix.
 
 import logging
 import os
+import signal
 import subprocess
 import sys
 import time
@@ -344,3 +345,71 @@ def test_counts_that_mean_nothing_are_refused_on_the_command_line(tmp_path, caps
     assert exc.value.code == 2
     assert match in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
+
+
+# ------------------------------------------------------------- class 7: nothing left behind
+
+_SAVE_BIG = """
+import sys
+from seds_casadi.app.plotting import pyplot, save_figure
+plt = pyplot()
+fig, ax = plt.subplots(figsize=(60, 60))
+ax.plot(range(100000))
+print("saving", flush=True)
+save_figure(fig, sys.argv[1], dpi=150)
+"""
+
+
+def test_a_figure_killed_while_saving_leaves_nothing_the_next_run_keeps(tmp_path):
+    """A run killed while it saves a figure leaves its temporary file (SIGKILL: no clean-up
+    can run); its name must be one the next run's sweep removes (it was NAME.tmp-PID.png, and
+    the sweep removes only names starting with '.tmp-')."""
+    from seds_casadi.app.outdir import LOCK_NAME, output_folder
+
+    out = tmp_path / "out"
+    out.mkdir()
+    proc = subprocess.Popen([sys.executable, "-c", _SAVE_BIG, str(out / "motion.png")],
+                            env=_env(), stdout=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout.readline().strip() == "saving"
+        deadline = time.time() + 60
+        while time.time() < deadline and proc.poll() is None:
+            left = [p.name for p in out.iterdir()]
+            if left:
+                break
+            time.sleep(0.005)
+        proc.kill()
+        proc.wait()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    left = sorted(p.name for p in out.iterdir())
+    assert left and all(n.startswith(".tmp-") and n.endswith("-motion.png") for n in left), left
+    with output_folder(out):  # the next run on the folder
+        assert sorted(p.name for p in out.iterdir()) == [LOCK_NAME]
+    assert list(out.iterdir()) == []
+
+
+def test_sighup_ends_a_command_like_ctrl_c_and_removes_the_run_lock(tmp_path):
+    """Closing the terminal (SIGHUP) killed the command by default and left the run lock
+    (.seds-casadi.lock) in --out; it now ends it like Ctrl-C: exit 130, nothing left."""
+    out = tmp_path / "out"
+    code = ("import signal; signal.signal(signal.SIGINT, signal.default_int_handler); "
+            "import sys; from seds_casadi.app.cli import main; sys.exit(main())")
+    proc = subprocess.Popen([sys.executable, "-c", code, "lasa", "--shapes", "Sshape", "Leaf_1",
+                             "--objectives", "mse", "--protocols", "all", "-K", "2",
+                             "--no-figures", "--out", str(out)],
+                            env=_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    lock = out / ".seds-casadi.lock"
+    deadline = time.time() + 60
+    while not lock.exists() and time.time() < deadline and proc.poll() is None:
+        time.sleep(0.01)
+    assert lock.exists(), proc.communicate()[1][-2000:]
+    time.sleep(0.3)
+    t0 = time.perf_counter()
+    proc.send_signal(signal.SIGHUP)
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == 130, err[-2000:]
+    assert time.perf_counter() - t0 < 2
+    assert "interrupted" in err
+    assert not lock.exists() and not (out / "lasa.csv").exists()

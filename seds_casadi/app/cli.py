@@ -20,7 +20,6 @@ import contextlib
 import json
 import logging
 import os
-import signal
 import sys
 import warnings
 from collections.abc import Iterator
@@ -480,11 +479,12 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     if a.command not in _COMMANDS:
         parser.error(f"unknown command {a.command}")
+    from ..core._signals import interrupt_on_termination, restore_handlers
     from ..core.errors import ConvergenceWarning, SEDSError
     from .outdir import output_folder
 
     warnings.simplefilter("always", ConvergenceWarning)
-    previous = _raise_on_sigterm()
+    previous = interrupt_on_termination()  # SIGTERM, SIGHUP: as Ctrl-C
     try:
         with output_folder(a.out), command_logging(
                 quiet=getattr(a, "quiet", False),
@@ -505,20 +505,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"seds-casadi {a.command}: error: {text}", file=sys.stderr)
         return 2
     finally:
-        with contextlib.suppress(ValueError, TypeError):  # not the main thread
-            signal.signal(signal.SIGTERM, previous)
-
-
-def _raise_on_sigterm():
-    """Turn SIGTERM into KeyboardInterrupt for a command's duration (the clean-up of Ctrl-C
-    runs); returns the previous handler."""
-    def handler(signum, frame):
-        raise KeyboardInterrupt
-
-    try:
-        return signal.signal(signal.SIGTERM, handler)
-    except ValueError:  # not the main thread: leave signals alone
-        return signal.getsignal(signal.SIGTERM)
+        restore_handlers(previous)
 
 
 if __name__ == "__main__":  # pragma: no cover

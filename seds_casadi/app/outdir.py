@@ -5,8 +5,9 @@ work it could not save (a path that is a file, lies under a file or is not writa
 ``ValueError`` naming it), holds an exclusive lock on it for the command's duration (a second run
 on the same folder is refused at once instead of mixing its outputs with the first's; the
 lock file is removed at the end, and so is the folder if the command made it and left it
-empty) and removes the temporary files (``.tmp-*``, written by :mod:`seds_casadi.core._io`
-before an atomic rename) that a killed run left behind: while the lock is held no other run
+empty) and removes the temporary files (``.tmp-*``, written before an atomic rename by
+:mod:`seds_casadi.core._io`, :func:`seds_casadi.app.plotting.save_figure` and the replay's GIF
+writer) that a killed run left behind: while the lock is held no other run
 can be writing them. :func:`path_under` builds the path of every file a command names after
 its input (a field's name): plain names only, inside the folder.
 """

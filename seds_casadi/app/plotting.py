@@ -31,16 +31,16 @@ def pyplot():
     return plt
 
 
-# the old private name, still imported by app/replay.py and app/validate.py: removed by the
-# game-layer change (they import pyplot)
-
-
 def save_figure(fig, path: str | os.PathLike, dpi: int = 110) -> None:
-    """Save a figure atomically (written to a temporary name, then renamed) and close it."""
+    """Save a figure atomically (written to a temporary name, then renamed) and close it.
+
+    The temporary name is ``.tmp-PID-NAME`` beside ``path`` (hidden, and the kind of name
+    :func:`seds_casadi.app.outdir.sweep_temporary_files` removes when a run was killed while
+    saving; the extension stays last, so the format is still chosen from it)."""
     plt = pyplot()
     path = os.fspath(path)
-    root, ext = os.path.splitext(path)
-    tmp = f"{root}.tmp-{os.getpid()}{ext}"
+    folder, name = os.path.split(path)
+    tmp = os.path.join(folder, f".tmp-{os.getpid()}-{name}")
     try:
         fig.savefig(tmp, dpi=dpi, bbox_inches="tight")
         os.replace(tmp, path)

@@ -8,6 +8,8 @@ signals' exceptions while such code runs: the handlers in force are still called
 what they raise is kept (:attr:`pending`), the running code asks its solver to stop (IPOPT's
 iteration callback returns 1), and the exception is raised when the block ends, in Python, where
 it reaches the caller.
+
+:func:`interrupt_on_termination` makes SIGTERM and SIGHUP end a command as Ctrl-C does.
 """
 
 from __future__ import annotations
@@ -15,9 +17,38 @@ from __future__ import annotations
 import signal
 import threading
 
-#: the signals whose Python handlers are held (SIGTERM: the command line raises
-#: KeyboardInterrupt for it)
-SIGNALS = (signal.SIGINT, signal.SIGTERM)
+#: signals that end a command the way Ctrl-C does (:func:`interrupt_on_termination`): a kill, and
+#: the terminal or SSH session closing (SIGHUP, where the platform has it)
+TERMINATING = (signal.SIGTERM, *((signal.SIGHUP,) if hasattr(signal, "SIGHUP") else ()))
+#: the signals whose Python handlers are held
+SIGNALS = (signal.SIGINT, *TERMINATING)
+
+
+def _raise_interrupt(signum, frame) -> None:
+    raise KeyboardInterrupt
+
+
+def interrupt_on_termination() -> dict:
+    """Make each of :data:`TERMINATING` raise ``KeyboardInterrupt`` (so the clean-up of Ctrl-C
+    runs: workers stopped, temporary files and the run lock removed, exit 130); returns the
+    previous handlers for :func:`restore_handlers`. Outside the main thread nothing changes
+    (and an empty dict is returned)."""
+    previous = {}
+    for sig in TERMINATING:
+        try:
+            previous[sig] = signal.signal(sig, _raise_interrupt)
+        except ValueError:  # not the main thread: leave signals alone
+            break
+    return previous
+
+
+def restore_handlers(previous: dict) -> None:
+    """Put back the handlers :func:`interrupt_on_termination` replaced."""
+    for sig, handler in previous.items():
+        try:
+            signal.signal(sig, handler)
+        except (ValueError, TypeError):  # not the main thread, or a handler set from C
+            pass
 
 
 class deferred_interrupts:
