@@ -137,5 +137,6 @@ def test_seds_with_bic_components_records_the_scores(spiral_demos):
     from seds_casadi.core.model_selection import dsopt_elbow_k
 
     assert info["n_components"] == learner.model_.n_components == dsopt_elbow_k(info["bic"])
-    with pytest.raises(TypeError, match=r"an int in the range \[1, inf\) or a str among \{'bic'\}"):
+    with pytest.raises(TypeError,
+                       match=r"an int in the range \[1, inf\), a str among \{'auto', 'bic'\}"):
         SEDS("aic").fit(spiral_demos)

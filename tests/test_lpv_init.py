@@ -71,5 +71,5 @@ def test_lpv_init_fits_a_certified_model(lyapunov):
 
 def test_unknown_init_is_refused():
     with pytest.raises(ValueError, match="'init' parameter of SEDS must be a str among "
-                                         "{'joint-em', 'lpv', 'pc'}. Got 'kmeans'"):
+                                         "{'joint-em', 'lpv', 'pc', 'auto'}. Got 'kmeans'"):
         SEDS(2, init="kmeans").fit(_spiral_demos())

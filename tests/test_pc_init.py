@@ -110,7 +110,7 @@ def test_joint_gmm_moves_the_gmm():
 
 def test_unknown_gmm_is_refused():
     with pytest.raises(ValueError, match="'gmm' parameter of SEDS must be a str among "
-                                         "{'joint', 'fixed'}. Got 'frozen'"):
+                                         "{'joint', 'fixed', 'auto'}. Got 'frozen'"):
         SEDS(2, gmm="frozen").fit(_spiral_demos())
 
 

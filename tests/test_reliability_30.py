@@ -152,7 +152,8 @@ demos = load_lasa("Sshape")
 try:
     # a long solve (tight tolerances, many iterations): IPOPT is still iterating at its first
     # progress line, 2 s in
-    model = SEDS(10, max_iter=20000, tol=1e-14, tol_objective_change=1e-16).fit(demos).model_
+    model = SEDS(10, objective="direction", max_iter=20000, tol=1e-14,
+                 tol_objective_change=1e-16).fit(demos).model_
     print("RETURNED", model.fit_info["status"], flush=True)
 except KeyboardInterrupt:
     print("KEYBOARDINTERRUPT", flush=True)

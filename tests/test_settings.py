@@ -205,14 +205,18 @@ def test_an_approach_direction_of_another_dimension_is_refused_before_any_work()
 
 
 def test_settings_resolve_what_a_combination_means():
-    default = SEDSSettings.from_params(SEDS().get_params())
+    default = SEDSSettings.from_params(SEDS(objective="direction").get_params())
     assert default.speed_calibration is SpeedCalibration.STRENGTH and default.fits_strength
     for objective in ("mse", "likelihood"):  # they fit speeds: no calibration, no strength
         s = SEDSSettings.from_params(SEDS(objective=objective,
                                           speed_calibration="median").get_params())
         assert s.speed_calibration is None and not s.fits_strength
     assert SEDSSettings.from_params(SEDS("bic").get_params()).problem.n_components is None
-    s = SEDSSettings.from_params(SEDS(approach_direction=[3.0, 4.0],
+    # SEDS(): the automatic settings (issue 29) and K to be chosen among 4-10
+    auto = SEDSSettings.from_params(SEDS().get_params())
+    assert auto.speed_calibration is None and auto.problem.gram_statistics
+    assert auto.k_candidates == tuple(range(4, 11))
+    s = SEDSSettings.from_params(SEDS(objective="direction", approach_direction=[3.0, 4.0],
                                       tol_objective_change=0).get_params())
     np.testing.assert_allclose(s.approach_direction, [0.6, 0.8])
     assert s.ipopt_objective_change_tol == 1e20  # 0 disables the early stop

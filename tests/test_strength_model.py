@@ -24,7 +24,7 @@ def wshape():
     demos = load_lasa("WShape", n_samples=100)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
-        fit = SEDS(5, random_state=0).fit(demos)
+        fit = SEDS(5, objective="direction", random_state=0).fit(demos)
     return demos, fit.model_
 
 
@@ -62,7 +62,8 @@ def test_median_calibration_is_the_plain_gmm_ds_and_stalls_on_wshape(wshape):
     demos, strength_model = wshape
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
-        plain = SEDS(5, random_state=0, speed_calibration="median").fit(demos).model_
+        plain = SEDS(5, objective="direction", random_state=0,
+                     speed_calibration="median").fit(demos).model_
     assert plain.strength is None and plain.fit_info["strength_components"] is None
     # the same optimum of Eq. 9 (same gains up to the factor), so the same streamlines
     np.testing.assert_allclose(plain.A, strength_model.A, rtol=1e-9, atol=1e-12)
@@ -137,7 +138,7 @@ def test_learned_p_with_a_strength_factor_is_version_4(tmp_path):
     demos = load_lasa("Angle", n_samples=30)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
-        model = SEDS(2, random_state=0, lyapunov="learned").fit(demos).model_
+        model = SEDS(2, objective="direction", random_state=0, lyapunov="learned").fit(demos).model_
     model.save(tmp_path / "m.npz")
     with np.load(tmp_path / "m.npz", allow_pickle=False) as z:
         assert int(z["version"]) == 4 and "lyapunov" in z.files
@@ -181,9 +182,9 @@ def test_bad_strength_settings_are_refused(wshape):
         StableDS(*args, strength=unbounded, strength_radius=1.0)
     for bad in (0, -2, 1.5, True):
         with pytest.raises(ValueError, match="strength_components"):
-            SEDS(2, strength_components=bad).fit(load_lasa("Angle", n_samples=10))
+            SEDS(2, objective="direction", strength_components=bad).fit(load_lasa("Angle", n_samples=10))
     with pytest.raises(ValueError, match="speed_calibration"):
-        SEDS(2, speed_calibration="fast").fit(load_lasa("Angle", n_samples=10))
+        SEDS(2, objective="direction", speed_calibration="fast").fit(load_lasa("Angle", n_samples=10))
 
 
 def test_demonstrations_that_hardly_move_get_a_clear_error():
@@ -192,7 +193,7 @@ def test_demonstrations_that_hardly_move_get_a_clear_error():
     V = -X * 1e-3
     V[2:] = 0.0  # two samples move, the rest stand still
     with pytest.raises(ValueError, match="hardly move"):
-        SEDS(1, random_state=0).fit(X, V)
+        SEDS(1, objective="direction", random_state=0).fit(X, V)
 
 
 def test_taper_radius_rule(wshape):
@@ -210,7 +211,8 @@ def test_taper_radius_rule(wshape):
     V = np.concatenate(demos.velocities)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
-        m = SEDS(2, random_state=0, max_iter=50).fit(X, V, target=demos.target).model_
+        m = SEDS(2, objective="direction", random_state=0, max_iter=50).fit(
+            X, V, target=demos.target).model_
     ext = float(np.max(np.ptp(X, axis=0)))
     assert m.strength_radius == pytest.approx(0.01 * ext, rel=1e-12)
 

@@ -360,7 +360,8 @@ class GramKernels:
         grad = ca.gradient(J, theta)
         self._f = ca.Function("seds_gram_objective", [theta], [J])
         self._g = ca.Function("seds_gram_gradient", [theta], [grad])
-        self._h = ca.Function("seds_gram_hessian", [theta], [ca.densify(ca.hessian(J, theta)[0])])
+        self._J, self._theta, self._h = J, theta, None  # the Hessian is built when first asked:
+        # in 7-D (K d = 28 and more) its expression takes seconds to build
         self.size, self.n_samples, self.norm, self.threads = layout.size, n, float(n), 1
 
     def value(self, theta) -> float:
@@ -373,6 +374,9 @@ class GramKernels:
 
     def hessian(self, theta) -> np.ndarray:
         """Hess J(theta), shape (P, P)."""
+        if self._h is None:
+            self._h = ca.Function("seds_gram_hessian", [self._theta],
+                                  [ca.densify(ca.hessian(self._J, self._theta)[0])])
         return np.asarray(self._h(theta))
 
     def casadi_function(self) -> ca.Function:

@@ -233,23 +233,78 @@ def pc_similarity(X: np.ndarray, Xd: np.ndarray) -> np.ndarray:
     return np.exp(-squareform(D) / (2.0 * sigma2)) * (1.0 + U @ U.T)
 
 
-def _pc_gmm(X: np.ndarray, Xd: np.ndarray, K: int, random_state, reg: float):
+@dataclass(frozen=True)
+class PCEmbedding:
+    """The spectral embedding of :func:`pc_similarity` on the (strided) samples of a data set,
+    computed once and shared by the K tried (``SEDS(n_components="auto")``).
+
+    Attributes
+    ----------
+    stride : int
+        The samples used are ``X[::stride]``.
+    maps : array, shape (n_used, n_columns)
+        scikit-learn's ``spectral_embedding`` (``drop_first=False``), as ``SpectralClustering``
+        computes it; K clusters take its first K columns.
+    state : tuple
+        The random state after the embedding (each K's k-means starts from it, as
+        ``SpectralClustering`` would).
+    """
+
+    stride: int
+    maps: np.ndarray
+    state: tuple
+
+
+def pc_embedding(X: np.ndarray, Xd: np.ndarray, n_columns: int, random_state) -> PCEmbedding:
+    """The spectral embedding of PC-GMM's similarity, in ``n_columns`` dimensions.
+
+    Parameters
+    ----------
+    X, Xd : array, shape (n, d)
+        Positions and velocities in the problem's scaled frame (:func:`data_scales`).
+    n_columns : int
+        The largest K it will serve.
+    random_state : int, RandomState or None
+    """
+    from sklearn.manifold import spectral_embedding
+    from sklearn.utils import check_random_state
+
+    stride = max(1, int(np.ceil(len(X) / PC_MAX_SAMPLES)))
+    Xs, Xds = X[::stride], Xd[::stride]
+    rs = check_random_state(sklearn_random_state(random_state))
+    with warnings.catch_warnings():  # a graph in several pieces is several clusters: fine here
+        warnings.filterwarnings("ignore", message="Graph is not fully connected")
+        maps = spectral_embedding(pc_similarity(Xs, Xds), n_components=int(n_columns),
+                                  random_state=rs, drop_first=False)
+    return PCEmbedding(stride, maps, rs.get_state())
+
+
+def _pc_gmm(X: np.ndarray, Xd: np.ndarray, K: int, random_state, reg: float,
+            embedding: PCEmbedding | None = None):
     """Weights, means and covariances of K Gaussians on the positions, from a spectral
     clustering of :func:`pc_similarity` into K clusters.
 
     PC-GMM itself samples a distance-dependent Chinese restaurant process whose prior is this
     similarity and so also chooses K; here K is the learner's ``n_components`` and the clusters
     come from the similarity's spectral embedding (our choice: deterministic given the seed,
-    about 0.1 s on 1,000 samples, and the same notion of a physically-consistent cluster)."""
-    from sklearn.cluster import SpectralClustering
+    about 0.1 s on 1,000 samples, and the same notion of a physically-consistent cluster):
+    scikit-learn's ``SpectralClustering(affinity="precomputed", assign_labels="kmeans")``
+    step by step, so that ``embedding`` (:func:`pc_embedding`, with at least K columns) can be
+    shared by several K."""
+    from sklearn.cluster import k_means
 
-    stride = max(1, int(np.ceil(len(X) / PC_MAX_SAMPLES)))
-    Xs, Xds = X[::stride], Xd[::stride]
-    with warnings.catch_warnings():  # a graph in several pieces is several clusters: fine here
-        warnings.filterwarnings("ignore", message="Graph is not fully connected")
-        labels = SpectralClustering(n_clusters=K, affinity="precomputed", assign_labels="kmeans",
-                                    random_state=sklearn_random_state(random_state)
-                                    ).fit_predict(pc_similarity(Xs, Xds))
+    if embedding is None or embedding.maps.shape[1] < K:
+        embedding = pc_embedding(X, Xd, K, random_state)
+    from threadpoolctl import threadpool_limits
+
+    rs = np.random.RandomState()
+    rs.set_state(embedding.state)
+    # one thread: on 1,000 samples OpenMP's threads cost more than they save, and on busy cores
+    # they wait for each other (a run of Lloyd took 0.12 s with two threads on two loaded
+    # cores, a few ms on one)
+    with threadpool_limits(1):
+        _, labels, _ = k_means(embedding.maps[:, :K], K, random_state=rs, n_init=10)
+    Xs = X[::embedding.stride]
     d = X.shape[1]
     weights, means, covs = np.zeros(K), np.zeros((K, d)), np.zeros((K, d, d))
     for k in range(K):
@@ -298,8 +353,11 @@ def _stable_gains_lpv(gamma: np.ndarray, X: np.ndarray, Xd: np.ndarray, P0: np.n
     M = ca.horzcat(*A_all)  # d x K d: F_i = M Phi_i
     f = ca.trace(M @ ca.DM(G) @ M.T) - 2 * ca.trace(M @ ca.DM(C))
     nlp = {"x": ca.vertcat(*z), "f": f}
-    solver = ca.nlpsol("lpv_gains", "ipopt", nlp, {"ipopt.print_level": 0, "print_time": False,
-                                                   "ipopt.sb": "yes", "ipopt.max_iter": 300})
+    opts = {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
+            "ipopt.max_iter": 300}
+    if len(z0) > GRAM_EXACT_HESSIAN_MAX_PARAMETERS:  # as the joint problem's Hessian
+        opts["ipopt.hessian_approximation"] = "limited-memory"
+    solver = ca.nlpsol("lpv_gains", "ipopt", nlp, opts)
     sol = solver(x0=np.array(z0))
     fA = ca.Function("A", [ca.vertcat(*z)], A_all)
     out = [np.asarray(a) for a in fA(sol["x"])] if K > 1 else [np.asarray(fA(sol["x"]))]
@@ -375,6 +433,7 @@ def _pack_theta(layout: Layout, P0: np.ndarray, margin: float, weights: np.ndarr
 def _initial_theta(
     layout: Layout, X: np.ndarray, Xd: np.ndarray, margin: float, random_state,
     P0: np.ndarray | None = None, init: Init = Init.JOINT_EM,
+    embedding: PCEmbedding | None = None,
 ) -> np.ndarray:
     """k-means + EM on the joint (x, xdot) data, then projected onto the stable set.
 
@@ -392,7 +451,8 @@ def _initial_theta(
     P0 = np.eye(d) if P0 is None else np.asarray(P0, dtype=float)
     if init is Init.PC:  # no joint EM: the start gains are each cluster's weighted regression
         weights, means, covs = _pc_gmm(X, Xd, K, random_state,
-                                       INIT_REG_COVAR if d <= 3 else INIT_REG_COVAR_HIGH_D)
+                                       INIT_REG_COVAR if d <= 3 else INIT_REG_COVAR_HIGH_D,
+                                       embedding)
         gamma = responsibilities(X, weights, means, covs)
         start = []
         for k in range(K):
@@ -419,7 +479,17 @@ def _initial_theta(
     return _pack_theta(layout, P0, margin, weights, means, covs, gains, X, Xd, gamma)
 
 
-def build_problem(demos: Demonstrations, settings: ProblemSettings) -> SEDSProblem:
+def data_scales(X: np.ndarray, Xd: np.ndarray) -> tuple[float, float]:
+    """The problem's scales (sx, sv): the RMS position and velocity per dimension, about the
+    target (the problem works on X / sx and Xd / sv)."""
+    d = X.shape[1]
+    sx = float(np.sqrt(np.mean(np.sum(X**2, axis=1)) / d))
+    sv = float(np.sqrt(np.mean(np.sum(Xd**2, axis=1)) / d))
+    return sx, sv
+
+
+def build_problem(demos: Demonstrations, settings: ProblemSettings,
+                  embedding: PCEmbedding | None = None) -> SEDSProblem:
     """Scale the data, initialise by k-means + EM and build the CasADi problem.
 
     Parameters
@@ -429,6 +499,9 @@ def build_problem(demos: Demonstrations, settings: ProblemSettings) -> SEDSProbl
         K and the modes (:class:`~seds_casadi.core.seds.SEDS`'s parameters of the same names).
         With ``lyapunov="learned"`` the initial P is
         :func:`~seds_casadi.core.lyapunov.estimate_lyapunov` of the data.
+    embedding : PCEmbedding, optional
+        With ``init="pc"``: the spectral embedding of these demonstrations (:func:`pc_embedding`
+        on the scaled samples), shared by several K; computed here otherwise.
     """
     if not isinstance(demos, Demonstrations):
         raise TypeError(
@@ -453,8 +526,7 @@ def build_problem(demos: Demonstrations, settings: ProblemSettings) -> SEDSProbl
             f"{d}-D ({layout.size} parameters, {X.shape[0] * d} velocity values); use fewer "
             "components or more samples"
         )
-    sx = float(np.sqrt(np.mean(np.sum(X**2, axis=1)) / d))
-    sv = float(np.sqrt(np.mean(np.sum(Xd**2, axis=1)) / d))
+    sx, sv = data_scales(X, Xd)
     if not (sx > 0 and sv > 0):
         raise ValueError("the demonstrations do not move away from the target; nothing to learn")
     check_approach(demos, X, Xd)
@@ -465,7 +537,8 @@ def build_problem(demos: Demonstrations, settings: ProblemSettings) -> SEDSProbl
     else:
         w = np.ones(len(X))
     P0 = estimate_lyapunov(Xs, Xds) if settings.learned_lyapunov else None
-    theta0 = _initial_theta(layout, Xs, Xds, margin, settings.random_state, P0, settings.init)
+    theta0 = _initial_theta(layout, Xs, Xds, margin, settings.random_state, P0, settings.init,
+                            embedding)
     lbx, ubx = _bounds(layout, settings.gain_limit)
     theta0 = np.clip(theta0, lbx + 1e-9, ubx - 1e-9)
     if settings.fixed_gmm:  # IPOPT takes x_i with lbx_i = ubx_i as a parameter of the problem
@@ -490,8 +563,9 @@ def build_problem(demos: Demonstrations, settings: ProblemSettings) -> SEDSProbl
         p0 = unpack_numpy(theta0, layout, margin)
         gamma = responsibilities(Xs, p0["priors"], p0["mu"], p0["Sx"])
         kernels = GramKernels(layout, margin, gamma, Xs, Xds)
-        if settings.hessian is Hessian.AUTO:  # exact whatever the size: the kernels are small
-            strategy = Hessian.EXACT
+        if settings.hessian is Hessian.AUTO:  # exact up to GRAM_EXACT_HESSIAN_MAX_PARAMETERS
+            strategy = (Hessian.EXACT if layout.size <= GRAM_EXACT_HESSIAN_MAX_PARAMETERS
+                        else Hessian.LIMITED_MEMORY)
     else:
         kernels = SumKernels(layout, settings.objective, margin, Xs, Xds, coef, norm,
                              compile=settings.compile, hessian=strategy is Hessian.EXACT,
@@ -511,6 +585,13 @@ def build_problem(demos: Demonstrations, settings: ProblemSettings) -> SEDSProbl
 #: 3-D K = 15, P = 284, ran the compiler for over 8 minutes and 10 GB); above, IPOPT's L-BFGS
 #: with exact gradients
 EXACT_HESSIAN_MAX_PARAMETERS = 80
+
+
+#: with the Gram statistics (``gmm="fixed"``, ``objective="mse"``) ``hessian="auto"`` is exact
+#: up to this many parameters (2-D K <= 30, 3-D K <= 13), L-BFGS above: the Hessian's symbolic
+#: expression is built by CasADi when IPOPT is set up, and in 7-D (49 parameters a component)
+#: that took 11 s of a 15 s fit at K = 4 (the solve 2.4 s), growing to about 2 minutes at K = 8
+GRAM_EXACT_HESSIAN_MAX_PARAMETERS = 120
 
 
 def hessian_strategy(requested: Hessian | str, n_parameters: int) -> Hessian:

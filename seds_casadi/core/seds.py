@@ -12,6 +12,7 @@ from algorithmic differentiation. After every solve the model is certified numer
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import time
 import warnings
@@ -20,14 +21,17 @@ import casadi as ca
 import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin
 
+from ._random import sklearn_random_state
 from ._signals import deferred_interrupts
 from .demonstrations import Demonstrations
-from .errors import ConvergenceWarning, SolverError, StabilityError
-from .model_selection import bic_n_components
+from .errors import ConvergenceWarning, SEDSError, SolverError, StabilityError
+from .model_selection import bic_n_components, choose_by_reproduction
 from .objectives import approach_constraints
-from .parametrization import stability_constraints
-from .problem import SEDSProblem, build_problem
-from .settings import PARAMETER_CONSTRAINTS, Hessian, SEDSSettings
+from .parametrization import Layout, stability_constraints
+from .problem import SEDSProblem, build_problem, data_scales, pc_embedding
+from .report import warn_ends_apart
+from .search import held_out_scores
+from .settings import AUTO, PARAMETER_CONSTRAINTS, Hessian, Init, SEDSSettings, SettingsError
 from .stable_ds import StableDS
 from .strength import StrengthFactor, StrengthFactorLearner
 from .user_constraints import UserConstraints
@@ -260,9 +264,9 @@ class SEDS(RegressorMixin, BaseEstimator):
 
     def __init__(
         self,
-        n_components: int | str = 5,
+        n_components: int | str = AUTO,
         *,
-        objective: str = "direction",
+        objective: str = AUTO,
         random_state=None,
         omega_lower: float = 1.0,
         omega_upper: float = 2.0,
@@ -275,14 +279,14 @@ class SEDS(RegressorMixin, BaseEstimator):
         compile: bool = True,
         approach_direction=None,
         approach_ratio: float = 4.0,
-        lyapunov: str = "identity",
+        lyapunov: str = AUTO,
         formulation: str = "by-construction",
         constraints=None,
         speed_calibration: str = "strength",
         strength_components: int | None = None,
-        gain_limit: float | None = None,
-        init: str = "joint-em",
-        gmm: str = "joint",
+        gain_limit: float | str | None = AUTO,
+        init: str = AUTO,
+        gmm: str = AUTO,
         solver_options: dict | None = None,
         verbose: bool = False,
     ) -> None:
@@ -331,6 +335,11 @@ class SEDS(RegressorMixin, BaseEstimator):
         settings = self._settings(demos)
         if n_components is not None:
             settings = settings.with_components(int(n_components))
+        elif settings.k_candidates is not None:
+            raise SettingsError(
+                f"K is chosen by fitting each of {list(settings.k_candidates)} "
+                "(n_components='auto' or a sequence): pass the K to build, "
+                "build_problem(demos, n_components=K)")
         elif settings.problem.n_components is None and isinstance(demos, Demonstrations):
             settings = self._choose_components(demos, settings)[0]
         return build_problem(demos, settings.problem)
@@ -377,15 +386,122 @@ class SEDS(RegressorMixin, BaseEstimator):
         self._validate_params()
         demos = _as_demonstrations(X, y, target)
         settings = self._settings(demos)
+        _check_solver_options(settings)
+        if settings.k_candidates is not None:
+            candidates = self._supported_candidates(demos, settings)
+        warn_ends_apart(demos, stacklevel=2)
+        t0 = time.perf_counter()
         bic = None
-        if settings.problem.n_components is None:
-            settings, bic = self._choose_components(demos, settings)
-        self.model_ = self._solve(demos, settings)
+        if settings.k_candidates is not None:
+            self.model_ = self._fit_candidates(demos, settings, candidates)
+        else:
+            if settings.problem.n_components is None:
+                settings, bic = self._choose_components(demos, settings)
+            self.model_ = self._solve(demos, settings)
         if bic is not None:
             self.model_.fit_info["bic"] = bic.tolist()
-        self.fit_info_ = self.model_.fit_info
+        info = self.model_.fit_info
+        info.setdefault("choice", {})
+        info["choice"].update(settings=dict(settings.choice),
+                              seconds=time.perf_counter() - t0)
+        self.fit_info_ = info
         self.n_features_in_ = demos.n_dims
         return self
+
+    def _supported_candidates(self, demos: Demonstrations, settings: SEDSSettings
+                              ) -> tuple[int, ...]:
+        """The K to try that the data supports (at least 2 samples per component and one
+        velocity value per parameter, as :func:`build_problem` asks); a K the user listed that
+        the data cannot support, or data that cannot be reproduced, is refused here, before
+        any solve."""
+        if not demos.time_ordered:
+            raise SettingsError(
+                "choosing K (n_components='auto' or a sequence) reproduces each demonstration "
+                "from its start, and these samples have no time order: give n_components, or "
+                "pass the trajectories as Demonstrations")
+        n, d = demos.n_samples, demos.n_dims
+        ps = settings.problem
+
+        def fits(K: int) -> bool:
+            size = Layout(K, d, with_noise=ps.with_noise, lyapunov=ps.lyapunov,
+                          formulation=ps.formulation).size
+            return n >= 2 * K and n * d >= size
+        ok = tuple(K for K in settings.k_candidates if fits(K))
+        if settings.choice.get("n_components", "").startswith("given"):
+            if len(ok) < len(settings.k_candidates):
+                bad = [K for K in settings.k_candidates if K not in ok]
+                raise SettingsError(
+                    f"{n} samples in {d}-D are too few for K = {bad} of the K listed in "
+                    "n_components; list smaller K or record more demonstrations")
+            return ok
+        if not ok:  # the default range: smaller K if the data are few
+            ok = tuple(K for K in range(1, settings.k_candidates[0]) if fits(K))[-3:]
+        if not ok:
+            raise SettingsError(f"{n} samples in {d}-D are too few for any K; record more "
+                                "demonstrations")
+        return ok
+
+    def _fit_candidates(self, demos: Demonstrations, settings: SEDSSettings,
+                        candidates: tuple[int, ...]) -> StableDS:
+        """Fit each K of ``candidates`` to all demonstrations and keep the one whose
+        reproductions of them score best (:func:`choose_by_reproduction`); the spectral
+        embedding of ``init="pc"`` is computed once for all."""
+        seed = sklearn_random_state(settings.problem.random_state)  # one seed for every K
+        embedding = None
+        if settings.problem.init is Init.PC:
+            X, Xd, _, _ = demos.stacked()
+            sx, sv = data_scales(X, Xd)
+            if sx > 0 and sv > 0:
+                embedding = pc_embedding(X / sx, Xd / sv, max(candidates), seed)
+        fitted, metrics, table = {}, {}, {}
+        for K in candidates:
+            t0 = time.perf_counter()
+            s_k = settings.with_components(K)
+            s_k = dataclasses.replace(s_k, problem=dataclasses.replace(s_k.problem,
+                                                                       random_state=seed))
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                try:
+                    model = self._solve(demos, s_k, embedding=embedding)
+                    sc = held_out_scores(model, demos)
+                except SEDSError as exc:
+                    table[K] = {"error": str(exc), "seconds": time.perf_counter() - t0}
+                    metrics[K] = None
+                    continue
+            fitted[K] = (model, caught)
+            metrics[K] = (sc["rmse"], sc["e_dot"], sc["dtw"])
+            table[K] = {"rmse": sc["rmse"], "e_dot": sc["e_dot"], "dtw": sc["dtw"],
+                        "seconds": time.perf_counter() - t0}
+        if not fitted:
+            raise SolverError("no candidate K gave a certified model: "
+                              + "; ".join(f"K={K}: {v['error']}" for K, v in table.items()),
+                              "no candidate")
+        K, score = choose_by_reproduction(metrics)
+        for k, v in score.items():
+            table[k]["score"] = v
+        model, caught = fitted[K]
+        for w in caught:  # the chosen fit's warnings reach the caller
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+        rng = (min(candidates), max(candidates))
+        model.fit_info["choice"] = {
+            "n_components": K, "candidates": {int(k): v for k, v in table.items()},
+            "rule": ("the smallest K whose reproductions of the demonstrations score within "
+                     "5 % of the best (geometric mean of RMSE, e_dot and DTW; "
+                     "model_selection.choose_by_reproduction)"),
+            "range": list(rng), "at_edge": bool(len(candidates) > 1 and K in rng
+                                                and not (K == rng[0] and rng[0] == 1)),
+        }
+        _LOG.info("SEDS: K = %d chosen among %s (%.1f s)", K, list(candidates),
+                  sum(v["seconds"] for v in table.values()))
+        return model
+
+    def report(self, demos: Demonstrations, **kwargs):
+        """How well the fitted model reproduces ``demos`` (:func:`~seds_casadi.core.report.fit_report`:
+        per demonstration, whether the reproduction from its start reaches the target, its
+        duration and peak speed against the demonstration's, RMSE, e_dot and DTW; warnings)."""
+        from .report import fit_report
+
+        return fit_report(self._fitted(), demos, **kwargs)
 
     def predict(self, X) -> np.ndarray:
         """f(x) of Eq. 5 of the fitted model at each point (see :meth:`StableDS.predict`)."""
@@ -460,19 +576,26 @@ class SEDS(RegressorMixin, BaseEstimator):
             ub.append(ubs)
         user = None
         if settings.constraints is not None:
-            user = UserConstraints(settings.constraints, prob)
+            try:
+                user = UserConstraints(settings.constraints, prob)
+            except (NotImplementedError, RuntimeError) as exc:  # CasADi refused what it returned
+                raise TypeError(
+                    "constraints(model) must return [(g, lower, upper), ...] with each g a "
+                    "CasADi expression (or number) of the model's entries and numeric bounds; "
+                    f"CasADi could not use what it returned: {str(exc).splitlines()[0]}"
+                ) from None
             g.append(user.of_theta(theta_sym))
             lb.append(user.lower)
             ub.append(user.upper)
         return g, lb, ub, user
 
-    def _solve(self, demos: Demonstrations, settings: SEDSSettings) -> StableDS:
+    def _solve(self, demos: Demonstrations, settings: SEDSSettings, embedding=None) -> StableDS:
         t0 = time.perf_counter()
         ps = settings.problem
         strength = radius = None  # first: data it cannot use is refused before the long solve
         if settings.fits_strength:
             strength, radius = self._fit_strength(demos, settings)
-        prob = build_problem(demos, ps)
+        prob = build_problem(demos, ps, embedding=embedding)
         theta_sym = ca.MX.sym("theta", prob.layout.size)
         # CasADi calls our Python callbacks (construction, derivatives, iterations) and turns
         # what they raise into its own errors: Ctrl-C / SIGTERM are held until the block ends
@@ -635,6 +758,24 @@ class SEDS(RegressorMixin, BaseEstimator):
             v_star = float(sf(np.asarray(demos.target, dtype=float)))
             radius = max(radius, STRENGTH_STEPS * v_star * demos.estimated_dt())
         return sf, min(radius, STRENGTH_RADIUS_MAX * extent)
+
+
+def _check_solver_options(settings: SEDSSettings) -> None:
+    """IPOPT's verdict on ``solver_options`` (and the learner's own options), on a problem of
+    one variable, before any work: a bad name or value is a :class:`SettingsError` naming it,
+    not CasADi's error from inside the fit."""
+    if not settings.solver_options:
+        return
+    x = ca.SX.sym("x")
+    opts = SEDS._ipopt_options(settings, Hessian.EXACT)
+    try:
+        ca.nlpsol("seds_options_check", "ipopt", {"x": x, "f": x**2}, opts)(x0=1.0)
+    except RuntimeError as exc:
+        last = [ln for ln in str(exc).splitlines() if ln.strip()][-1]
+        raise SettingsError(
+            f"IPOPT refused solver_options {dict(settings.solver_options)!r}: "
+            f"{last.split(': ', 1)[-1].strip()} (names and types as in IPOPT's documentation, "
+            "e.g. {'mu_strategy': 'adaptive', 'max_cpu_time': 60.0})") from None
 
 
 def _run(solver, progress: _Progress, **inputs) -> tuple[dict, dict]:

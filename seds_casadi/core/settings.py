@@ -36,7 +36,9 @@ from sklearn.utils._param_validation import Interval, StrOptions, validate_param
 
 __all__ = ["Mode", "Objective", "Lyapunov", "Formulation", "Init", "GMMMode", "Hessian",
            "SpeedCalibration", "OBJECTIVES", "PARAMETER_CONSTRAINTS", "ProblemSettings",
-           "SEDSSettings", "NumberRange", "ModeOptions"]
+           "SEDSSettings", "NumberRange", "ModeOptions", "AUTO", "AUTO_SETTINGS", "BEST_SETTINGS",
+           "CLASSIC_SETTINGS", "AUTO_K_RANGE", "MAX_ITER", "MIN_GAIN_LIMIT",
+           "MAX_STABILITY_MARGIN", "SettingsError"]
 
 
 class Mode(StrEnum):
@@ -127,27 +129,93 @@ class NumberRange(Interval):
 class ModeOptions(StrOptions):
     """scikit-learn's ``StrOptions`` of a :class:`Mode`'s names, listed in the mode's order."""
 
-    def __init__(self, mode: type[Mode]) -> None:
-        super().__init__(set(mode.values()))
-        self.mode = mode
+    def __init__(self, mode: type[Mode], extra: tuple[str, ...] = ()) -> None:
+        super().__init__(set(mode.values()) | set(extra))
+        self.mode, self.extra = mode, tuple(extra)
 
     def __str__(self) -> str:
-        return "a str among {" + ", ".join(repr(v) for v in self.mode.values()) + "}"
+        return "a str among {" + ", ".join(repr(v) for v in self.mode.values() + self.extra) + "}"
 
 
 _POSITIVE = NumberRange(Real, 0, None, closed="neither")  # finite and > 0 (inf, nan refused)
 _COUNT = NumberRange(Integral, 1, None, closed="left")
 
+
+class SettingsError(ValueError):
+    """Settings that are valid one by one but make no sense together, or for the data (a K
+    range the demonstrations cannot support): raised before any solve."""
+
+
+#: the value of a setting the learner chooses itself (``SEDS()``'s default)
+AUTO = "auto"
+#: the settings chosen automatically (``"auto"``)
+AUTO_SETTINGS = ("objective", "lyapunov", "init", "gmm", "gain_limit")
+#: what the ``"auto"`` settings become with the squared-error objective (the default): a
+#: physically-consistent GMM kept fixed, a learned P and a gain limit. On the ds-opt LASA
+#: protocol this was the best of the learner's variants (``benchmarks/README.md``, issues 13,
+#: 14, 29), and its fits take a fraction of a second (the Gram statistics), so that several K
+#: can be tried
+BEST_SETTINGS = MappingProxyType({"objective": "mse", "init": "pc", "gmm": "fixed",
+                                  "lyapunov": "learned", "gain_limit": 10.0})
+#: ... and with settings the above was not measured with (another objective, the constrained
+#: formulation, an arrival constraint or constraints of the user's own): SEDS's own
+CLASSIC_SETTINGS = MappingProxyType({"objective": "direction", "init": "joint-em",
+                                     "gmm": "joint", "lyapunov": "identity", "gain_limit": None})
+#: the K tried by ``n_components="auto"`` (limited to what the data supports)
+AUTO_K_RANGE = (4, 10)
+#: K taken by ``n_components="auto"`` when the settings are not :data:`BEST_SETTINGS` (their
+#: fits are too slow to try several K by default; the default K before issue 29)
+CLASSIC_K = 5
+#: largest ``max_iter`` (IPOPT reads it as a 32-bit integer; a million iterations of a SEDS
+#: problem is already days)
+MAX_ITER = 10**6
+#: smallest ``gain_limit`` (the gains' bounds in the scaled frame, where the data's own rate is
+#: about 1: below this no component could follow the data, and IPOPT's bounds collapse)
+MIN_GAIN_LIMIT = 1e-3
+#: largest ``stability_margin`` (m in A_k + A_k^T <= -2 m I, scaled frame: a margin of 10 asks
+#: every component to contract 10 times faster than the data move)
+MAX_STABILITY_MARGIN = 10.0
+
+
+class _KOptions(StrOptions):
+    """``n_components``' names, listed in a fixed order."""
+
+    def __init__(self) -> None:
+        super().__init__({AUTO, "bic"})
+
+    def __str__(self) -> str:
+        return "a str among {'auto', 'bic'}"
+
+
+class _KCandidates(Interval):
+    """``n_components`` given as the K to try: a sequence of positive integers."""
+
+    def __init__(self) -> None:
+        super().__init__(Integral, 1, None, closed="left")
+
+    def is_satisfied_by(self, val) -> bool:
+        if isinstance(val, str | bytes | dict) or not hasattr(val, "__len__"):
+            return False
+        try:
+            items = list(val)
+        except TypeError:
+            return False
+        return len(items) > 0 and all(
+            isinstance(k, Integral) and not isinstance(k, bool | np.bool_) for k in items)
+
+    def __str__(self) -> str:
+        return "a sequence of positive ints (the K to try, e.g. range(4, 11))"
+
 #: every SEDS parameter's allowed types and values, as scikit-learn declares them
 #: (``SEDS._parameter_constraints``; checked by ``SEDS.fit`` before any work)
 PARAMETER_CONSTRAINTS: dict[str, list] = {
-    "n_components": [_COUNT, StrOptions({"bic"})],
-    "objective": [ModeOptions(Objective)],
+    "n_components": [_COUNT, _KOptions(), _KCandidates()],
+    "objective": [ModeOptions(Objective, (AUTO,))],
     "random_state": ["random_state", np.random.Generator],
     "omega_lower": [_POSITIVE],
     "omega_upper": [_POSITIVE],
-    "stability_margin": [_POSITIVE],
-    "max_iter": [_COUNT],
+    "stability_margin": [NumberRange(Real, 0, MAX_STABILITY_MARGIN, closed="right")],
+    "max_iter": [NumberRange(Integral, 1, MAX_ITER, closed="both")],
     "tol": [_POSITIVE],
     "tol_objective_change": [NumberRange(Real, 0, None, closed="left")],
     "hessian": [ModeOptions(Hessian)],
@@ -155,14 +223,15 @@ PARAMETER_CONSTRAINTS: dict[str, list] = {
     "compile": ["boolean"],
     "approach_direction": ["array-like", None],
     "approach_ratio": [NumberRange(Real, 1, None, closed="left")],
-    "lyapunov": [ModeOptions(Lyapunov)],
+    "lyapunov": [ModeOptions(Lyapunov, (AUTO,))],
     "formulation": [ModeOptions(Formulation)],
     "constraints": [callable, None],
     "speed_calibration": [ModeOptions(SpeedCalibration)],
     "strength_components": [_COUNT, None],
-    "gain_limit": [_POSITIVE, None],
-    "init": [ModeOptions(Init)],
-    "gmm": [ModeOptions(GMMMode)],
+    "gain_limit": [NumberRange(Real, MIN_GAIN_LIMIT, None, closed="left"), None,
+                   StrOptions({AUTO})],
+    "init": [ModeOptions(Init, (AUTO,))],
+    "gmm": [ModeOptions(GMMMode, (AUTO,))],
     "solver_options": [dict, None],
     "verbose": ["verbose"],
 }
@@ -275,6 +344,12 @@ class SEDSSettings:
     require_convergence, verbose : bool
     solver_options : mapping
         Read-only; IPOPT's names as the user gave them.
+    k_candidates : tuple of int or None
+        The K to try (``n_components="auto"`` or a sequence), smallest first; None when K is
+        given or chosen by BIC.
+    choice : mapping
+        For each setting of :data:`AUTO_SETTINGS` and ``n_components``: ``"given"`` or why the
+        learner set it (``fit_info["choice"]``).
     """
 
     problem: ProblemSettings
@@ -289,6 +364,8 @@ class SEDSSettings:
     require_convergence: bool
     solver_options: Mapping[str, Any]
     verbose: bool
+    k_candidates: tuple[int, ...] | None = None
+    choice: Mapping[str, str] = dataclasses.field(default_factory=dict)
 
     @classmethod
     def from_params(cls, params: Mapping[str, Any], n_dims: int | None = None) -> SEDSSettings:
@@ -309,9 +386,31 @@ class SEDSSettings:
         ValueError, TypeError
             With what to change.
         """
+        params, choice = resolve_auto(params)
         K = params["n_components"]
+        candidates = None
+        if isinstance(K, str) and K == AUTO:
+            fast = (params["gmm"] == GMMMode.FIXED and params["objective"] == Objective.MSE
+                    and params["formulation"] == Formulation.BY_CONSTRUCTION)
+            if fast:
+                candidates = tuple(range(AUTO_K_RANGE[0], AUTO_K_RANGE[1] + 1))
+                choice["n_components"] = (
+                    f"auto: the K in {AUTO_K_RANGE[0]}-{AUTO_K_RANGE[1]} whose reproductions of "
+                    "the demonstrations fit them best (model_selection.choose_by_reproduction)")
+            else:
+                K = CLASSIC_K
+                choice["n_components"] = (
+                    f"auto: {CLASSIC_K}, the classic default (K is searched only when each fit "
+                    "is fast: gmm='fixed' with objective='mse')")
+        elif isinstance(K, str):
+            choice["n_components"] = "bic"
+        elif not isinstance(K, Integral):
+            candidates = _k_candidates(K)
+            choice["n_components"] = "given: the K tried " + ", ".join(map(str, candidates))
+        else:
+            choice["n_components"] = "given"
         problem = ProblemSettings(
-            n_components=None if isinstance(K, str) else K,
+            n_components=None if (isinstance(K, str) or candidates is not None) else K,
             **{name: params[name] for name in (f.name for f in dataclasses.fields(ProblemSettings))
                if name != "n_components"})
         u = params["approach_direction"]
@@ -332,7 +431,8 @@ class SEDSSettings:
             tol=float(params["tol"]), tol_objective_change=float(params["tol_objective_change"]),
             require_convergence=bool(params["require_convergence"]),
             solver_options=MappingProxyType(_solver_options(params["solver_options"])),
-            verbose=bool(params["verbose"]))
+            verbose=bool(params["verbose"]), k_candidates=candidates,
+            choice=MappingProxyType(choice))
         settings._check_combinations(n_dims)
         return settings
 
@@ -343,6 +443,15 @@ class SEDSSettings:
             if bare in _OWN_IPOPT_OPTIONS:
                 raise ValueError(f"solver_options sets {bare!r}, which the learner's own "
                                  f"settings decide: use {_OWN_IPOPT_OPTIONS[bare]} instead")
+        ps = self.problem
+        if ps.gain_limit is not None and ps.stability_margin >= ps.gain_limit:
+            raise SettingsError(
+                f"stability_margin={ps.stability_margin:g} is not below gain_limit="
+                f"{ps.gain_limit:g}: every component must contract at least at the margin's rate "
+                "and at most at about the gain limit's; lower the margin or raise the limit")
+        if ps.fixed_gmm and ps.constrained:
+            raise SettingsError("gmm='fixed' optimises the gains of the by-construction form; "
+                                "use formulation='by-construction' with it, or gmm='joint'")
         u = self.approach_direction
         if u is not None and n_dims is not None and u.shape != (n_dims,):
             raise ValueError(f"approach_direction has {u.shape[0]} entries for {n_dims}-D "
@@ -362,6 +471,63 @@ class SEDSSettings:
     def ipopt_objective_change_tol(self) -> float:
         """IPOPT's ``acceptable_obj_change_tol`` (``tol_objective_change``; 0 disables it)."""
         return self.tol_objective_change if self.tol_objective_change > 0 else 1e20
+
+
+def resolve_auto(params: Mapping[str, Any]) -> tuple[dict, dict]:
+    """The parameters with every ``"auto"`` setting of :data:`AUTO_SETTINGS` replaced, and why.
+
+    The rule (issue 29): the automatic settings are :data:`BEST_SETTINGS` (squared velocity
+    error, a physically-consistent GMM kept fixed, a learned P, ``gain_limit=10``), measured
+    the best on the ds-opt LASA protocol and checked on 3-D and 7-D motions
+    (``benchmarks/README.md``); ``lyapunov``, ``init``, ``gmm`` or ``gain_limit`` given
+    explicitly overrides its own entry only. Naming the objective (any, ``"mse"`` included)
+    asks for SEDS as published, and so does fixing something the set was not measured with
+    (the constrained formulation, an arrival constraint, constraints of one's own): the
+    remaining automatic settings are then SEDS's own (:data:`CLASSIC_SETTINGS`), as before
+    issue 29, so that code written for those defaults fits the same model.
+
+    Returns
+    -------
+    params : dict
+        A copy with the choices made (``n_components`` untouched).
+    choice : dict
+        Per setting of :data:`AUTO_SETTINGS`: ``"given"`` or ``"auto: ..."``.
+    """
+    out = dict(params)
+    given = {k: out[k] for k in AUTO_SETTINGS if not (isinstance(out[k], str) and out[k] == AUTO)}
+    classic_reasons = []
+    if "objective" in given:
+        classic_reasons.append(f"objective={given['objective']!r}")
+    if out.get("formulation") == Formulation.CONSTRAINED:
+        classic_reasons.append("formulation='constrained'")
+    if out.get("approach_direction") is not None:
+        classic_reasons.append("an approach_direction")
+    if out.get("constraints") is not None:
+        classic_reasons.append("constraints")
+    table = CLASSIC_SETTINGS if classic_reasons else BEST_SETTINGS
+    why = ("auto: SEDS's own, as " + " and ".join(classic_reasons) + " was given"
+           if classic_reasons else "auto: the measured best (BEST_SETTINGS)")
+    choice = {}
+    for k in AUTO_SETTINGS:
+        if k in given:
+            choice[k] = "given"
+        else:
+            out[k] = table[k]
+            choice[k] = why
+    return out, choice
+
+
+def _k_candidates(value) -> tuple[int, ...]:
+    """The K to try, as given in ``n_components`` (a sequence of positive ints), checked."""
+    items = [int(k) for k in value]
+    if any(k < 1 for k in items):
+        raise SettingsError(f"n_components lists K = {min(items)}: every K must be at least 1")
+    if len(set(items)) != len(items):
+        raise SettingsError(f"n_components lists a K twice: {items}")
+    if len(items) > 20:
+        raise SettingsError(f"n_components lists {len(items)} values of K; at most 20 are "
+                            "tried (each is a fit)")
+    return tuple(sorted(items))
 
 
 def _solver_options(options: dict | None) -> dict:
