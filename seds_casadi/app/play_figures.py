@@ -32,7 +32,12 @@ def play_figures(fld, motion, data, fitted: dict, rows: list[dict], learners, ou
 
 def _shots_figure(fld, rows, learners, out, robot) -> None:
     plt = pyplot()
-    fig, axs = plt.subplots(len(learners), 1, figsize=(9.5, 3.6 * len(learners)), squeeze=False)
+    b = fld.bounds
+    # each panel as tall as the field drawn at the figure's width (a long field leaves no
+    # empty band between the panels), plus its title and labels
+    panel = float(np.clip(7.6 * (b[3] - b[2]) / (b[1] - b[0]), 1.0, 9.0)) + 1.2
+    fig, axs = plt.subplots(len(learners), 1, figsize=(9.5, panel * len(learners)),
+                            squeeze=False)
     for ax, m in zip(axs[:, 0], learners):
         rs = [r for r in rows if r["method"] == m]
         checked = [((r["ball_x_m"], r["ball_y_m"]), r["sunk_exudyn"] == r["sunk"])
@@ -46,6 +51,10 @@ def _shots_figure(fld, rows, learners, out, robot) -> None:
                      f"{np.mean([r['sunk'] for r in rs]):.0%} of {len(rs)} shots sunk",
                      fontsize=9)
     fig.tight_layout()
+    # the field is drawn at equal scales: fit the panels' height to the width they got
+    width = axs[0, 0].get_window_extent().width / fig.dpi
+    fig.set_size_inches(9.5, len(learners) * (width * (b[3] - b[2]) / (b[1] - b[0]) + 1.1))
+    fig.tight_layout()
     save_figure(fig, os.path.join(out, "shots.png"))
 
 
@@ -55,7 +64,7 @@ def _motion_figure(motion, out) -> None:
     from ..motion.rotation import rotation_z
 
     plt = pyplot()
-    fig, (top, side) = plt.subplots(2, 1, figsize=(8, 7.6), sharex=True,
+    fig, (top, side) = plt.subplots(2, 1, figsize=(8, 7.8),
                                     gridspec_kw={"height_ratios": [3, 1.3]})
     for deg, c in ((0.0, "k"), (15.0, "tab:blue"), (-15.0, "tab:orange")):
         alpha = np.radians(deg)
@@ -73,12 +82,26 @@ def _motion_figure(motion, out) -> None:
         ax.set_ylabel(f"{lab}, relative to the ball [m]")
         ax.grid(alpha=0.3)
         ax.set_title(f"club-head paths {name}; dots: starts", fontsize=9)
-    top.set_aspect("equal")
-    side.set_xlabel("x, relative to the ball, along the unturned hit [m]")
+    # the same x range in both panels, each with its ticks and label; the view from above at
+    # equal scales: its y range (or, if the paths need more, both x ranges) sized to its box
+    for ax in (top, side):
+        ax.set_xlabel("x, relative to the ball, along the unturned hit [m]")
+    lo = min(top.get_xlim()[0], side.get_xlim()[0])
+    hi = max(top.get_xlim()[1], side.get_xlim()[1])
+    ylo, yhi = top.get_ylim()
     top.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     fig.suptitle(f"the learned hitting motion (Eq. 14), turned by alpha; v* = "
                  f"{motion.hitting_speed:.2f} m/s at kappa = 1", fontsize=10)
     fig.tight_layout()
+    box = top.get_window_extent()
+    ratio = box.height / box.width
+    if (yhi - ylo) > (hi - lo) * ratio:
+        grow = ((yhi - ylo) / ratio - (hi - lo)) / 2
+        lo, hi = lo - grow, hi + grow
+    mid, half = (ylo + yhi) / 2, (hi - lo) * ratio / 2
+    top.set_ylim(mid - half, mid + half)
+    for ax in (top, side):
+        ax.set_xlim(lo, hi)
     save_figure(fig, os.path.join(out, "motion.png"))
 
 
