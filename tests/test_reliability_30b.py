@@ -413,3 +413,28 @@ def test_sighup_ends_a_command_like_ctrl_c_and_removes_the_run_lock(tmp_path):
     assert time.perf_counter() - t0 < 2
     assert "interrupted" in err
     assert not lock.exists() and not (out / "lasa.csv").exists()
+
+
+# ------------------------------------------------ issue 31: the replay GIF's size and legend
+
+def test_the_replay_gif_is_large_enough_for_a_paper(tmp_path):
+    """1000 x 750 pixels (it was 576 x 432), from a replay given as arrays (a straight arm,
+    a ball rolling towards the hole)."""
+    from PIL import Image
+
+    from seds_casadi.app.replay import REPLAY_COLOURS, Replay, write_replay_gif
+    from seds_casadi.minigolf.fields import load_field
+
+    fld = load_field("arctan")
+    n = 4
+    t = np.linspace(0, 0.3, n)
+    chain = np.array([[[0, 0.3, 0], [0, 0.3, 0.5], [0.1, 0.1, 0.5], [0.1, 0.1, 0.05]]] * n)
+    ball = np.column_stack([np.linspace(0.1, 1.0, n), np.zeros(n), np.full(n, 0.03)])
+    row = {"hole_x_m": fld.hole[0], "hole_y_m": fld.hole[1], "alpha_deg": 0.0, "kappa": 1.0}
+    r = Replay(t, chain, chain[:, -2:], ball, 2, 0.1, "gpr shot 0 (missed)", row, fld.name, "wam")
+    path = write_replay_gif(r, fld, tmp_path / "r.gif")
+    with Image.open(path) as im:
+        assert im.size == (1000, 750) and im.n_frames == n
+        px = np.asarray(im.convert("RGB")).reshape(-1, 3).astype(int)
+    assert np.sum(np.all(np.abs(px - REPLAY_COLOURS["robot"]) <= 40, axis=1)) > 100
+    assert [p.name for p in tmp_path.iterdir()] == ["r.gif"]

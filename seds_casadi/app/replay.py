@@ -191,12 +191,14 @@ def write_replay_html(replays: list[Replay], field, path: str | os.PathLike) -> 
 
 
 def write_replay_gif(replay: Replay, field, path: str | os.PathLike, max_frames: int = 60,
-                     fps: float = 12.0, dpi: int = 90) -> str:
+                     fps: float = 12.0, dpi: int = 125) -> str:
     """Write one shot as an animated GIF (matplotlib 3-D axes, Pillow) to ``path``.
 
-    The frames are spread evenly over the replay (at most ``max_frames``), so a long roll plays
-    faster than real time; the title gives the simulated time of each frame."""
+    8 x 6 inches at ``dpi`` (1000 x 750 pixels by default, for a paper or a slide). The frames
+    are spread evenly over the replay (at most ``max_frames``), so a long roll plays faster than
+    real time; the title gives the simulated time of each frame."""
     from matplotlib.animation import PillowWriter
+    from matplotlib.lines import Line2D
 
     from .plotting import pyplot
 
@@ -204,28 +206,33 @@ def write_replay_gif(replay: Replay, field, path: str | os.PathLike, max_frames:
     c = {k: np.array(v) / 255 for k, v in REPLAY_COLOURS.items()}
     g = _field_grid(field, 24)
     X, Y = np.meshgrid(g["x"], g["y"])
-    fig = plt.figure(figsize=(6.4, 4.8))
+    fig = plt.figure(figsize=(8.0, 6.0))
     ax = fig.add_subplot(projection="3d")
     ax.plot_surface(X, Y, g["z"], color=c["field"], alpha=0.55, linewidth=0, shade=True)
     hole = np.array([replay.row["hole_x_m"], replay.row["hole_y_m"]])
     a = np.linspace(0, 2 * np.pi, 30)
     hx, hy = hole[0] + field.hole_radius * np.cos(a), hole[1] + field.hole_radius * np.sin(a)
-    ax.plot(hx, hy, field.surface.height(np.column_stack([hx, hy])) + 1e-3, color="k",
-            label="hole")
+    ax.plot(hx, hy, field.surface.height(np.column_stack([hx, hy])) + 1e-3, color="k", lw=1.5)
     pts = np.concatenate([replay.chain.reshape(-1, 3), replay.ball])
     lo = np.minimum(pts.min(0), [g["bounds"][0], g["bounds"][2], 0])
     hi = np.maximum(pts.max(0), [g["bounds"][1], g["bounds"][3], 0.1])
-    ax.set(xlim=(lo[0], hi[0]), ylim=(lo[1], hi[1]), zlim=(lo[2], hi[2]),
-           xlabel="x [m]", ylabel="y [m]", zlabel="z [m]")
-    ax.set_box_aspect(hi - lo, zoom=1.12)
-    fig.subplots_adjust(left=0.02, right=0.9, bottom=0.04, top=0.9)
+    ax.set(xlim=(lo[0], hi[0]), ylim=(lo[1], hi[1]), zlim=(lo[2], hi[2]))
+    # the labels clear of the tick labels (3-D axes put them on top of each other by default)
+    ax.set_xlabel("x [m]", labelpad=14)
+    ax.set_ylabel("y [m]", labelpad=10)
+    ax.set_zlabel("z [m]", labelpad=8)
+    ax.tick_params(labelsize=8)
+    ax.set_box_aspect(hi - lo, zoom=1.05)
+    fig.subplots_adjust(left=0.0, right=0.94, bottom=0.02, top=0.92)
     ax.view_init(elev=28, azim=-60)
     arm, = ax.plot([], [], [], "-o", color=c["robot"], lw=4, ms=3, mfc=c["joint"],
                    label=f"{replay.robot} arm")
     club, = ax.plot([], [], [], "-", color=c["club"], lw=2, label="club")
     trail, = ax.plot([], [], [], "-", color=c["trail"], lw=1.5, label="ball path")
     ball, = ax.plot([], [], [], "o", color="w", mec="k", ms=6, label="ball")
-    ax.legend(loc="upper left", fontsize=7)
+    hole_key = Line2D([], [], ls="none", marker="o", ms=9, mfc="none", mec="k", mew=1.5,
+                      label="hole")   # a ring, as drawn (not a line)
+    ax.legend(handles=[arm, club, trail, ball, hole_key], loc="upper left", fontsize=8)
     frames = np.unique(np.linspace(0, len(replay.t) - 1, min(max_frames, len(replay.t)))
                        .astype(int))
     writer = PillowWriter(fps=fps)
@@ -243,7 +250,7 @@ def write_replay_gif(replay: Replay, field, path: str | os.PathLike, max_frames:
                 ax.set_title(f"{replay.field}: the {replay.robot}, {replay.label}\n"
                              f"t = {replay.t[k]:.2f} s, alpha = "
                              f"{replay.row['alpha_deg']:.2f} deg, kappa = "
-                             f"{replay.row['kappa']:.3f}", fontsize=9)
+                             f"{replay.row['kappa']:.3f}", fontsize=10)
                 writer.grab_frame()
         os.chmod(tmp, 0o644 & ~umask())
         os.replace(tmp, path)
