@@ -74,13 +74,15 @@ def _at_least(low: int):
     return whole
 
 
-def _components(text: str) -> int | str:
-    if text == "bic":
+def _components(text: str) -> int | str | range:
+    if text in ("bic", "auto"):
         return text
+    lo, sep, hi = text.partition("-")
     try:
-        return int(text)
+        return range(int(lo), int(hi) + 1) if sep and lo else int(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer or 'bic', got {text!r}") from None
+        raise argparse.ArgumentTypeError(f"expected an integer, a range such as 4-8, 'auto' or "
+                                         f"'bic', got {text!r}") from None
 
 
 def _add_fit(sub, quiet) -> None:
@@ -92,31 +94,33 @@ def _add_fit(sub, quiet) -> None:
                                    "seds_casadi.core.demo_files) and write model.npz and "
                                    "streamlines.png to --out. Shows the solver's progress.")
     f.add_argument("demonstrations", help="path to a .npz or .csv demonstrations file")
-    f.add_argument("--components", "-K", type=_components, default=5,
-                   help="number of Gaussians, or 'bic' to choose it by BIC [5]")
-    f.add_argument("--objective", choices=OBJECTIVES, default="direction",
-                   help="objective [direction]")
+    f.add_argument("--components", "-K", type=_components, default="auto",
+                   help="number of Gaussians; 'auto': the K in 4-10 whose reproductions fit the "
+                        "demonstrations best (with the automatic settings); 'bic' [auto]")
+    f.add_argument("--objective", choices=OBJECTIVES + ("auto",), default="auto",
+                   help="objective; 'auto': mse with the automatic settings (see SEDS) [auto]")
     f.add_argument("--dt", type=float, default=None,
                    help="time step [s] of the samples, needed only when the file has neither "
                         "velocities nor time stamps [from the file]")
     f.add_argument("--seed", type=int, default=0, help="random seed of the initialisation [0]")
     f.add_argument("--max-iter", type=int, default=1000, help="IPOPT iteration limit [1000]")
-    f.add_argument("--lyapunov", choices=Lyapunov.values(), default="identity",
+    f.add_argument("--lyapunov", choices=Lyapunov.values() + ("auto",), default="auto",
                    help="the certificate's V = (x - x*)^T P (x - x*): P = I (SEDS) or a "
-                        "learned P [identity]")
+                        "learned P [auto: learned]")
     f.add_argument("--formulation", choices=Formulation.values(), default="by-construction",
                    help="Eq. 10 by the parametrization or as NLP constraints [by-construction]")
-    f.add_argument("--gain-limit", type=float, default=None,
+    f.add_argument("--gain-limit", type=_gain_limit, default="auto",
                    help="bound the stiffness of the components (units of the data's rate; "
                         "10 suited the LASA shapes, but it can also hold a fit back: "
-                        "compare with and without) [none]")
-    f.add_argument("--init", choices=Init.values(), default="joint-em",
+                        "compare with and without); 'none' for no limit [auto: 10]")
+    f.add_argument("--init", choices=Init.values() + ("auto",), default="auto",
                    help="IPOPT's start: EM on [x; xdot] (SEDS), LPV-DS's (EM on x, "
                         "least-squares stable gains) or the same from a physically-consistent "
-                        "clustering (PC-GMM's similarity) [joint-em]")
-    f.add_argument("--gmm", choices=GMMMode.values(), default="joint",
+                        "clustering (PC-GMM's similarity) [auto: pc]")
+    f.add_argument("--gmm", choices=GMMMode.values() + ("auto",), default="auto",
                    help="optimise the GMM with the dynamics (SEDS) or keep the start's GMM and "
-                        "optimise the dynamics only (LPV-DS's split; with --init pc) [joint]")
+                        "optimise the dynamics only (LPV-DS's split; with --init pc) "
+                        "[auto: fixed]")
     f.add_argument("--speed", choices=SpeedCalibration.values(), default="strength",
                    help="how a direction-objective model gets the demonstrated speeds: a "
                         "strength factor v(x) by GMR along the certified streamlines (Eq. 12), "
@@ -128,6 +132,17 @@ def _add_fit(sub, quiet) -> None:
                         "options are common to every candidate; the chosen one is refitted on "
                         "all demonstrations [no search]")
     f.add_argument("--out", default="seds_out", help="output folder [seds_out]")
+
+
+def _gain_limit(text: str) -> float | str | None:
+    """``--gain-limit``: a number, 'auto' or 'none'."""
+    if text.strip().lower() in ("auto", "none"):
+        return None if text.strip().lower() == "none" else "auto"
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, 'auto' or 'none', got {text!r}"
+                                         ) from None
 
 
 def _choice(text: str) -> tuple[str, list]:
@@ -334,17 +349,32 @@ def _cmd_fit(a) -> int:
         from .plot_ds import plot_fit_views
 
         fig = plot_fit_views(model, demos, repro, title=f"{os.path.basename(a.demonstrations)}: "
-                             f"SEDS ({a.objective}, K={model.n_components})")
+                             f"SEDS ({model.fit_info['objective_name']}, "
+                             f"K={model.n_components})")
     else:
         fig, ax = pyplot().subplots(figsize=(5.5, 5))
         plot_1d_reproductions(model, demos, repro, ax=ax,
-                              title=f"SEDS ({a.objective}, K={model.n_components})")
+                              title=f"SEDS ({model.fit_info['objective_name']}, "
+                                    f"K={model.n_components})")
     save_figure(fig, os.path.join(a.out, "streamlines.png"))
     info = {k: model.fit_info[k] for k in ("status", "iterations", "objective", "seconds")}
     if "search" in model.fit_info:
         info["chosen"] = model.fit_info["search"]["best_params"]
     print(json.dumps(info, indent=1))
-    print(f"wrote {path} and {os.path.join(a.out, 'streamlines.png')}")
+    from ..core.report import fit_report
+    from .fit_report import plot_fit_report
+
+    report = fit_report(model, demos)
+    print(f"fit report (SEDS, {model.fit_info['objective_name']}, K={model.n_components}):")
+    print(report)
+    report.save(os.path.join(a.out, "report.json"))
+    with open(os.path.join(a.out, "report.txt"), "w", encoding="utf-8") as fh:
+        fh.write(str(report) + "\n")
+    save_figure(plot_fit_report(report, demos, title=f"{os.path.basename(a.demonstrations)}: "
+                                f"reproductions from each start, K={model.n_components}"),
+                os.path.join(a.out, "report.png"))
+    print(f"wrote {path}, {os.path.join(a.out, 'streamlines.png')}, report.txt, report.json "
+          "and report.png")
     return 0
 
 
@@ -496,6 +526,14 @@ def main(argv: list[str] | None = None) -> int:
         print(f"seds-casadi {a.command}: interrupted; the files written so far are complete, "
               f"the rest was not written", file=sys.stderr)
         return 130
+    except RuntimeError as exc:  # CasADi's errors (a setting it refused, a failed call)
+        if debug or not ("casadi" in str(exc).lower() or "ipopt" in str(exc).lower()):
+            raise
+        lines = [ln for ln in str(exc).splitlines() if ln.strip()]
+        print(f"seds-casadi {a.command}: error: CasADi/IPOPT failed: "
+              f"{lines[-1].split(': ', 1)[-1].strip() if lines else type(exc).__name__} "
+              "(--debug shows the traceback)", file=sys.stderr)
+        return 2
     except (*_USER_ERRORS, SEDSError) as exc:
         if debug:
             raise
