@@ -630,12 +630,16 @@ def _learn_correction(model: CorrectedModel, green: Green, data: HittingDataset,
                       n_teach: int) -> CorrectedModel:
     """The correction over the situations: the teacher's good shots at ``n_teach`` of the data
     set's situations (equally spaced) moved onto the estimated green (:func:`matching_shots`),
-    learned by the model's GPR; returns ``model``."""
+    less the taught model's predictions there, learned by the model's GPR; returns
+    ``model``."""
     idx = np.unique(np.linspace(0, len(data) - 1, min(int(n_teach), len(data))).round()
                     .astype(int))
     A1, K1, ok = matching_shots(green, data.ball[idx], data.hole[idx], data.alpha[idx],
                                 data.kappa[idx])
-    C = np.column_stack([np.rad2deg(A1 - data.alpha[idx]), np.log(K1 / data.kappa[idx])])
+    # against the taught model's own predictions there: the correction also takes out the
+    # model's error at these situations (GMR smooths the teacher's shots)
+    T = model.taught(data.situations[idx])
+    C = np.column_stack([np.rad2deg(A1) - T[:, 0], np.log(K1 / T[:, 1])])
     if ok.any():
         model.fit_correction(data.situations[idx][ok], C[ok])
     return model
