@@ -20,7 +20,7 @@ import numpy as np
 from ._random import sklearn_random_state
 
 __all__ = ["bic_n_components", "bic_scores", "dsopt_elbow_k", "choose_k_by_bic", "BIC_RULES",
-           "MAX_COMPONENTS", "choose_by_reproduction", "REPRODUCTION_TOLERANCE"]
+           "MAX_COMPONENTS", "choose_by_reproduction", "REPRODUCTION_TOLERANCE", "speed_penalty"]
 
 #: largest K tried by ``n_components="bic"`` (ds-opt's limit)
 MAX_COMPONENTS = 15
@@ -31,8 +31,18 @@ BIC_RULES = ("ds-opt", "min")
 REPRODUCTION_TOLERANCE = 1.05
 
 
-def choose_by_reproduction(scores: dict, tolerance: float = REPRODUCTION_TOLERANCE
-                           ) -> tuple[int, dict]:
+def speed_penalty(ratios) -> float:
+    """exp(max(0, max_n |ln r_n| - ln 1.25)) for peak-speed ratios r_n (reproduction over
+    demonstration): 1 while every ratio is within [0.8, 1.25], growing as the worst leaves it
+    (a reproduction peaking at 2.5x the demonstrated speed costs a factor 2)."""
+    r = np.asarray(ratios, dtype=float)
+    if r.size == 0 or not np.all(np.isfinite(r)) or np.any(r <= 0):
+        return float("inf") if r.size else 1.0
+    return float(np.exp(max(0.0, float(np.max(np.abs(np.log(r)))) - np.log(1.25))))
+
+
+def choose_by_reproduction(scores: dict, tolerance: float = REPRODUCTION_TOLERANCE,
+                           speed_ratios: dict | None = None) -> tuple[int, dict]:
     """K by how well each candidate model reproduces the demonstrations it was fitted to.
 
     ``SEDS(n_components="auto")``'s criterion (issue 29). Each candidate K is fitted to all the
@@ -44,7 +54,10 @@ def choose_by_reproduction(scores: dict, tolerance: float = REPRODUCTION_TOLERAN
         s(K) = (RMSE(K) * e_dot(K) * DTW(K))^(1/3),
 
     so that the units drop out of every comparison (s(K) / s(K') is the geometric mean of the
-    three ratios, as :class:`~seds_casadi.core.search.DemoSearchCV`'s scoring). K is the
+    three ratios, as :class:`~seds_casadi.core.search.DemoSearchCV`'s scoring), times
+    :func:`speed_penalty` of the reproductions' peak speeds over the demonstrations' when
+    ``speed_ratios`` are given (a model that rushes where the demonstrations did not is worse
+    than its path shows; ``SEDS`` gives them). K is the
     smallest candidate with s(K) <= ``tolerance`` * min s: between candidates that reproduce
     about equally well the simpler model is kept.
 
@@ -62,6 +75,8 @@ def choose_by_reproduction(scores: dict, tolerance: float = REPRODUCTION_TOLERAN
         ``{K: (rmse, e_dot, dtw)}``; a failed candidate may be left out, or given as None.
     tolerance : float, default 1.05
         At least 1.
+    speed_ratios : dict, optional
+        ``{K: array of peak-speed ratios}``, one per demonstration.
 
     Returns
     -------
@@ -85,6 +100,9 @@ def choose_by_reproduction(scores: dict, tolerance: float = REPRODUCTION_TOLERAN
         ok = m.shape == (3,) and np.all(np.isfinite(m))
         # a perfect metric (0) would make the product 0: floor each at a tiny value
         table[int(K)] = float(np.exp(np.mean(np.log(np.maximum(m, 1e-12))))) if ok else None
+        if ok and speed_ratios is not None and K in speed_ratios:
+            pen = speed_penalty(speed_ratios[K])
+            table[int(K)] = table[int(K)] * pen if np.isfinite(pen) else None
     valid = {K: v for K, v in table.items() if v is not None}
     if not valid:
         raise ValueError("no candidate K gave a model whose reproductions could be scored")

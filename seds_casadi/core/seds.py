@@ -453,7 +453,8 @@ class SEDS(RegressorMixin, BaseEstimator):
             sx, sv = data_scales(X, Xd)
             if sx > 0 and sv > 0:
                 embedding = pc_embedding(X / sx, Xd / sv, max(candidates), seed)
-        fitted, metrics, table = {}, {}, {}
+        fitted, metrics, table, ratios = {}, {}, {}, {}
+        demo_peaks = np.array([np.linalg.norm(v, axis=1).max() for v in demos.velocities])
         for K in candidates:
             t0 = time.perf_counter()
             s_k = settings.with_components(K)
@@ -463,20 +464,25 @@ class SEDS(RegressorMixin, BaseEstimator):
                 warnings.simplefilter("always")
                 try:
                     model = self._solve(demos, s_k, embedding=embedding)
-                    sc = held_out_scores(model, demos)
+                    sc = held_out_scores(model, demos, return_paths=True)
                 except SEDSError as exc:
                     table[K] = {"error": str(exc), "seconds": time.perf_counter() - t0}
                     metrics[K] = None
                     continue
             fitted[K] = (model, caught)
             metrics[K] = (sc["rmse"], sc["e_dot"], sc["dtw"])
+            paths = sc["paths"]  # (T, demos, d), every data step
+            peak = np.linalg.norm(model.predict(paths.reshape(-1, paths.shape[2])), axis=1
+                                  ).reshape(paths.shape[:2]).max(axis=0)
+            ratios[K] = peak / np.maximum(demo_peaks, 1e-300)
             table[K] = {"rmse": sc["rmse"], "e_dot": sc["e_dot"], "dtw": sc["dtw"],
+                        "peak_speed_ratios": ratios[K].tolist(),
                         "seconds": time.perf_counter() - t0}
         if not fitted:
             raise SolverError("no candidate K gave a certified model: "
                               + "; ".join(f"K={K}: {v['error']}" for K, v in table.items()),
                               "no candidate")
-        K, score = choose_by_reproduction(metrics)
+        K, score = choose_by_reproduction(metrics, speed_ratios=ratios)
         for k, v in score.items():
             table[k]["score"] = v
         model, caught = fitted[K]
@@ -486,7 +492,8 @@ class SEDS(RegressorMixin, BaseEstimator):
         model.fit_info["choice"] = {
             "n_components": K, "candidates": {int(k): v for k, v in table.items()},
             "rule": ("the smallest K whose reproductions of the demonstrations score within "
-                     "5 % of the best (geometric mean of RMSE, e_dot and DTW; "
+                     "5 % of the best (geometric mean of RMSE, e_dot and DTW, times a penalty "
+                     "for peak speeds outside 0.8-1.25x the demonstrations'; "
                      "model_selection.choose_by_reproduction)"),
             "range": list(rng), "at_edge": bool(len(candidates) > 1 and K in rng
                                                 and not (K == rng[0] and rng[0] == 1)),
