@@ -44,13 +44,18 @@ templates_path = []
 # options such as --out stay two hyphens (no en dash), in the pages and in --help's text
 smartquotes = False
 
-# no network: no intersphinx inventories, MathJax only loaded by the reader's browser (from its
-# CDN; SEDS_DOCS_MATHJAX=URL takes another copy, e.g. Debian's libjs-mathjax for offline reading:
+# no network, neither for the build nor for reading the site: no intersphinx inventories, and
+# MathJax (3.2.2) ships with the site, from the pip package sphinx-mathjax-offline (the docs
+# extra): it copies MathJax into _static/mathjax and points the pages at it, so the equations
+# render from a file:// copy on a machine without internet. SEDS_DOCS_MATHJAX=URL takes another
+# copy instead (a CDN, or Debian's libjs-mathjax 2:
 # file:///usr/share/javascript/mathjax/MathJax.js?config=TeX-AMS-MML_HTMLorMML)
 if os.environ.get("SEDS_DOCS_MATHJAX"):
     mathjax_path = os.environ["SEDS_DOCS_MATHJAX"]
     if "MathJax.js" in mathjax_path:  # MathJax 2: MyST marks the pages' text tex2jax_ignore
         mathjax2_config = {"tex2jax": {"processClass": "math", "ignoreClass": "tex2jax_ignore"}}
+else:
+    extensions.append("sphinx-mathjax-offline")
 suppress_warnings = []
 nitpicky = False
 

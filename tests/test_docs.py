@@ -21,7 +21,8 @@ pytest.importorskip("sphinx", reason="the docs extra is not installed: pip insta
 def site(tmp_path_factory):
     """The site built once: ``python -m sphinx -W -b html docs OUT`` (examples not run)."""
     out = tmp_path_factory.mktemp("site")
-    env = {k: v for k, v in os.environ.items() if k != "SEDS_DOCS_RUN_EXAMPLES"}
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("SEDS_DOCS_RUN_EXAMPLES", "SEDS_DOCS_MATHJAX")}
     env["MPLBACKEND"] = "Agg"
     res = subprocess.run(
         [sys.executable, "-m", "sphinx", "-W", "--keep-going", "-q", "-b", "html",
@@ -34,6 +35,20 @@ def site(tmp_path_factory):
 def test_the_site_builds_with_warnings_as_errors(site):
     assert (site / "index.html").exists()
     assert (site / "auto_examples" / "index.html").exists()
+
+
+def test_the_maths_renders_offline_from_the_sites_own_mathjax(site):
+    """Every page with equations loads MathJax from the site (sphinx-mathjax-offline), never
+    from a CDN: the site is read on machines without internet."""
+    pages = {p: p.read_text(encoding="utf-8") for p in site.rglob("*.html")}
+    maths = [p for p, text in pages.items() if 'class="math' in text]
+    assert len(maths) >= 4  # the layers pages with the paper's equations
+    for page in maths:
+        srcs = re.findall(r'<script[^>]*src="([^"]*mathjax[^"]*)"', pages[page], re.I)
+        assert srcs and all("//" not in s for s in srcs), (page, srcs)
+    for page, text in pages.items():  # no page loads it from elsewhere
+        assert not re.search(r'src="[^"]*//[^"]*mathjax', text, re.I), page
+    assert (site / "_static" / "mathjax" / "tex-chtml.js").stat().st_size > 100_000
 
 
 def test_the_api_reference_documents_every_public_name(site):
