@@ -179,3 +179,38 @@ def test_demonstrations_that_end_apart_are_warned_about():
         rep = fit_report(learner.model_, apart)
     assert any("demonstration 2 ends" in w for w in rep.warnings)
     assert not any("demonstration 1 ends" in w for w in rep.warnings)
+
+
+def test_speed_penalty_known_answers():
+    from seds_casadi.core.model_selection import speed_penalty
+
+    assert speed_penalty([0.8, 1.0, 1.25]) == pytest.approx(1.0)
+    assert speed_penalty([2.5]) == pytest.approx(2.0)
+    assert speed_penalty([0.4]) == pytest.approx(2.0)  # log-symmetric: 0.8 / 0.4
+    assert speed_penalty([1.0, np.nan]) == np.inf
+    # a candidate that rushes loses against a slightly worse path at the demonstrated speed
+    K, _ = choose_by_reproduction({3: (1.0, 1.0, 1.0), 4: (1.1, 1.1, 1.1)},
+                                  speed_ratios={3: [2.0], 4: [1.1]})
+    assert K == 4
+
+
+def test_cli_fit_prints_and_saves_the_report(tmp_path):
+    import subprocess
+    import sys
+
+    from seds_casadi.core.demo_files import save_demonstrations
+
+    demo_file = tmp_path / "demos.npz"
+    save_demonstrations(demo_file, decaying_spiral_demos())
+    out = tmp_path / "out"
+    res = subprocess.run([sys.executable, "-m", "seds_casadi", "fit", str(demo_file), "-K", "2-3",
+                          "--out", str(out)], capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, res.stderr
+    assert "reproductions reach the target" in res.stdout and "Traceback" not in res.stderr
+    rep = json.loads((out / "report.json").read_text())
+    assert len(rep["rows"]) == 3 and rep["choice"]["range"] == [2, 3]
+    assert (out / "report.png").stat().st_size > 1000 and (out / "report.txt").exists()
+    bad = subprocess.run([sys.executable, "-m", "seds_casadi", "fit", str(demo_file), "-K", "0-3",
+                          "--out", str(tmp_path / "bad")], capture_output=True, text=True,
+                         timeout=300)
+    assert bad.returncode == 2 and "Traceback" not in bad.stderr and "at least 1" in bad.stderr
