@@ -21,6 +21,7 @@ from seds_casadi.core import seds as seds_module
 from seds_casadi.core.parametrization import Layout
 from seds_casadi.core.problem import build_problem
 from seds_casadi.core.settings import (
+    AUTO_SETTINGS,
     PARAMETER_CONSTRAINTS,
     Formulation,
     GMMMode,
@@ -129,9 +130,10 @@ def test_a_bad_value_of_each_parameter_is_refused_by_fit_before_any_work(name, v
     text = str(exc)
     assert text.startswith(f"The {name!r} parameter of SEDS must be "), text
     assert f"Got {value!r} instead" in text
-    if name in MODES:  # every valid name, in the mode's order (the default first)
+    if name in MODES:  # every valid name, in the mode's order, then "auto" if it has one
         listed = ", ".join(repr(v) for v in MODES[name].values())
-        assert f"a str among {{{listed}}}" in text, text
+        auto = ", 'auto'" if name in AUTO_SETTINGS else ""
+        assert f"a str among {{{listed}{auto}}}" in text, text
 
 
 @pytest.mark.parametrize("value", [[0.0, 0.0], [NAN, 1.0], [[INF, 1.0]]])
