@@ -214,3 +214,17 @@ def test_cli_fit_prints_and_saves_the_report(tmp_path):
                           "--out", str(tmp_path / "bad")], capture_output=True, text=True,
                          timeout=300)
     assert bad.returncode == 2 and "Traceback" not in bad.stderr and "at least 1" in bad.stderr
+
+
+@pytest.mark.parametrize("approach_ratio", [None, 4.0])
+def test_the_hitting_motion_keeps_the_settings_it_had(approach_ratio):
+    # HittingMotionLearner names its objective, so SEDS's automatic settings resolve to SEDS's
+    # own (the defaults before issue 29): the hitting motion of `play` is the same model
+    from seds_casadi.core.settings import ProblemSettings
+    from seds_casadi.motion.hitting import HittingMotionLearner
+
+    opts = HittingMotionLearner(approach_ratio=approach_ratio)._seds_options(
+        np.array([1.0, 0.0, 0.0]))
+    s = SEDSSettings.from_params(SEDS(3, random_state=0, **opts).get_params(), n_dims=3)
+    assert s.problem == ProblemSettings(3, objective="direction", random_state=0)
+    assert s.k_candidates is None and s.speed_calibration == "median"
