@@ -283,9 +283,10 @@ def _field_spec(**changes) -> dict:
     ({"shape": "plane", "slope_x": 1e6, "slope_y": 0.0}, r"rises 1e\+06 m per metre"),
     ({"shape": "plane", "slope_x": 0.8, "slope_y": 0.8}, r"rises 1.13 m per metre"),
     # steps 0.1 mm and 0.1 um wide, centred between the 1 cm grid's lines (the grid saw them
-    # nearly flat: 2 /m and 0.06 /m, against the ball's 47 /m)
-    ({"shape": "arctan", "height": 0.002, "steepness": 1e4, "y0": 0.005}, r"rises 12.7 m"),
-    ({"shape": "arctan", "height": 1e-5, "steepness": 1e7, "y0": 0.005}, r"rises 63.7 m"),
+    # nearly flat: 2 /m and 1e-5 /m, against the 47 /m of the ball's radius)
+    ({"shape": "arctan", "height": 0.002, "steepness": 1e4, "y0": 0.005},
+     r"radius of 0.0121 mm near \(-0.300, 0.005\)"),
+    ({"shape": "arctan", "height": 1e-5, "steepness": 1e7, "y0": 0.005}, "radius of 2.42e-06 mm"),
     # a step 5 mm wide, gentle enough (slope 0.51) but curved 66 /m
     ({"shape": "arctan", "height": 0.004, "steepness": 200, "y0": 0.005}, r"radius of 15.\d mm"),
     ({"shape": "hills", "hills": [{"x": 1.005, "y": 0.005, "height": 1e-4, "width": 1e-4}]},

@@ -161,11 +161,6 @@ class Surface:
         from ..motion.golf import BALL_RADIUS
 
         ext = self.extremes(bounds)
-        if ext["slope"] > MAX_SLOPE:
-            raise ValueError(
-                f"{where}: the surface rises {ext['slope']:.3g} m per metre at its steepest, "
-                f"more than {MAX_SLOPE:g} (45 deg): a slope that steep is a wall, not a green the "
-                "ball model rolls on. Use gentler slopes (the shipped fields reach 0.17).")
         if ext["curvature"] * BALL_RADIUS > 1.0:
             x, y = ext["where"]
             raise ValueError(
@@ -173,6 +168,11 @@ class Surface:
                 f" near ({x:.3f}, {y:.3f}), tighter than the ball's radius "
                 f"({1e3 * BALL_RADIUS:.2f} mm): a ball cannot follow it. Smooth the surface "
                 "(smaller height differences between neighbouring points, wider bumps).")
+        if ext["slope"] > MAX_SLOPE:
+            raise ValueError(
+                f"{where}: the surface rises {ext['slope']:.3g} m per metre at its steepest, "
+                f"more than {MAX_SLOPE:g} (45 deg): a slope that steep is a wall, not a green the "
+                "ball model rolls on. Use gentler slopes (the shipped fields reach 0.17).")
 
     def _terms(self, Q):
         """Height, gradient and Hessian entries (xx, xy, yy) at Q (n, 2); the sums of bumps in
