@@ -37,7 +37,7 @@ def test_seds_learns_and_reproduces_the_7d_joint_space_putts(wam_and_joint_demos
     _, _, joints = wam_and_joint_demos
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        model = SEDS(3, random_state=0).fit(joints).model_
+        model = SEDS(3, objective="direction", random_state=0).fit(joints).model_
     assert model.n_dims == 7 and model.certificate["max_eig_lyapunov"] < 0
     X, V = np.concatenate(joints.positions), np.concatenate(joints.velocities)
     assert np.mean(pointwise_direction_error(model.predict(X), V)) < 0.05
