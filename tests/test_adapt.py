@@ -198,3 +198,19 @@ def test_play_corrects_itself_on_a_tilted_green(tmp_path):
     assert (tmp_path / "adaptation.png").stat().st_size > 10_000
     header = (tmp_path / "shots.csv").read_text().splitlines()[0]
     assert header.endswith("phase,adapt_shots")
+
+
+def test_a_path_passes_the_hole_at_a_side_distance_and_speed():
+    """Known answers of path_passage: a straight roll at 1 m/s beside the hole, and one that
+    stops short; and a residual is zero before any shot and constant after one."""
+    from seds_casadi.game.adapt import PassageResidual, path_passage
+
+    t = np.arange(0, 3.0, 0.01)
+    path = np.column_stack([t * 1.0, np.full_like(t, -0.01)])   # 1 cm right of the hole
+    off, v2 = path_passage(path, t, [1.5, 0.0], 0.5)
+    assert off == pytest.approx(0.01) and v2 == pytest.approx(1.0)
+    short = path[t <= 1.2]
+    off, v2 = path_passage(short, t[t <= 1.2], [1.5, 0.0], 0.5)
+    assert v2 == pytest.approx(-2 * 0.5 * (1.5 - short[-1, 0]))
+    r = PassageResidual()
+    assert np.array_equal(r(np.zeros((3, 2))), np.zeros((3, 2)))

@@ -53,6 +53,7 @@ from .shot import ENGINES, Shot, ShotResult, play_shot
 
 __all__ = ["World", "check_world", "Green", "Observation", "estimate_green", "CorrectedModel",
            "Adaptation", "AdaptationStep", "adapt", "next_situation", "GREEN_PARAMETERS",
+           "PassageResidual", "hole_passage", "path_passage", "matching_shots",
            "world_names"]
 
 #: what a world may change of its field (the green); everything else is the course
@@ -437,6 +438,7 @@ class Adaptation:
     world: World
     green: Green | None = None
     steps: list[AdaptationStep] = field(default_factory=list)
+    residual: PassageResidual | None = None
     snapshots: dict = field(default_factory=dict)
 
     @property
@@ -464,39 +466,89 @@ def next_situation(candidates: tuple[np.ndarray, np.ndarray], played: np.ndarray
     return int(np.argmax(d))
 
 
+def path_passage(path, times, hole, a_roll: float) -> np.ndarray:
+    """How a path (k, 2) with its times (k,) passes the hole: (signed distance from the hole's
+    centre to the path where it passes nearest [m], positive with the hole on the path's left;
+    the squared speed there [m^2/s^2], or for a ball that stops short of the hole minus
+    2 a_roll d, d its distance short: the squared speed it lacked). Continuous in the hit, so
+    Newton's method can steer it (:func:`matching_shots`)."""
+    path = np.asarray(path, float)
+    h = np.asarray(hole, float)
+    if len(path) < 2:
+        return np.array([0.0, -2 * a_roll * float(np.linalg.norm(h - path[0]))])
+    seg = np.diff(path, axis=0)
+    dt = np.maximum(np.diff(np.asarray(times, float)), 1e-9)
+    L2 = np.maximum(np.sum(seg * seg, axis=1), 1e-18)
+    lam = np.clip(np.sum((h - path[:-1]) * seg, axis=1) / L2, 0.0, 1.0)
+    near = path[:-1] + lam[:, None] * seg
+    j = int(np.argmin(np.sum((near - h) ** 2, axis=1)))
+    u = seg[j] / np.sqrt(L2[j])
+    d = h - near[j]
+    offset = float(u[0] * d[1] - u[1] * d[0])
+    ahead = float(d @ u)
+    if j == len(seg) - 1 and ahead > 1e-9:   # stopped short of the hole
+        return np.array([offset, -2 * a_roll * ahead])
+    return np.array([offset, L2[j] / dt[j] ** 2])
+
+
 def hole_passage(green: Green, balls, holes, alphas, kappas) -> np.ndarray:
-    """How the hits' balls pass their holes on a green (the hole left out), shape (n, 2): the
-    signed distance from the hole's centre to the path where it passes nearest [m] (positive:
-    the hole on the path's left), and the squared speed there [m^2/s^2]; for a ball that stops
-    before it reaches the hole, minus 2 a d (d its distance short of the hole, a the rolling
-    deceleration): the squared speed it lacked. Continuous in the hit, so Newton's method can
-    steer it (:func:`matching_shots`)."""
+    """How the hits' balls pass their holes on a green (the hole left out), shape (n, 2)
+    (:func:`path_passage`)."""
     holes = np.atleast_2d(np.asarray(holes, float))
     res, dt = green.simulate(balls, alphas, kappas)
     a_roll = 5 / 7 * green.field.rolling_resistance * 9.81
-    out = np.zeros((len(holes), 2))
-    for i, (path, h) in enumerate(zip(res.paths, holes)):
-        if len(path) < 2:
-            out[i] = [0.0, -2 * a_roll * float(np.linalg.norm(h - path[0]))]
-            continue
-        seg = np.diff(path, axis=0)
-        L2 = np.maximum(np.sum(seg * seg, axis=1), 1e-18)
-        lam = np.clip(np.sum((h - path[:-1]) * seg, axis=1) / L2, 0.0, 1.0)
-        near = path[:-1] + lam[:, None] * seg
-        j = int(np.argmin(np.sum((near - h) ** 2, axis=1)))
-        u = seg[j] / np.sqrt(L2[j])
-        d = h - near[j]
-        offset = float(u[0] * d[1] - u[1] * d[0])
-        ahead = float(d @ u)
-        if j == len(seg) - 1 and ahead > 1e-9:   # stopped short of the hole
-            out[i] = [offset, -2 * a_roll * ahead]
-        else:
-            out[i] = [offset, L2[j] / dt**2]
-    return out
+    return np.array([path_passage(path, np.arange(len(path)) * dt, h, a_roll)
+                     for path, h in zip(res.paths, holes)])
+
+
+class PassageResidual:
+    """What the estimated green still gets wrong: the observed balls' passage of the hole
+    (:func:`path_passage` of the camera's paths) less the estimated green's for the same hits,
+    learned over the situations by GPR (Eq. 17; a constant from one shot; zero before any).
+
+    A world the green's parameters describe leaves it near zero; one they cannot describe
+    (hills of another height, a bump the model lacks) leaves a smooth residual that
+    :func:`matching_shots` then aims to cancel.
+    """
+
+    def __init__(self) -> None:
+        self.S_ = np.zeros((0, 2))
+        self.R_ = np.zeros((0, 2))
+        self._gp = None
+
+    def fit(self, green: Green, observations: list[Observation], holes) -> PassageResidual:
+        """From the observations (not sunk or sunk alike) and their holes, on ``green``."""
+        obs = [(o, h) for o, h in zip(observations, holes) if o is not None]
+        self._gp = None
+        if not obs:
+            self.S_, self.R_ = np.zeros((0, 2)), np.zeros((0, 2))
+            return self
+        B = np.array([o.ball for o, _ in obs])
+        H = np.array([h for _, h in obs])
+        model = hole_passage(green, B, H, np.array([o.alpha for o, _ in obs]),
+                             np.array([o.kappa for o, _ in obs]))
+        a_roll = 5 / 7 * green.field.rolling_resistance * 9.81
+        seen = np.array([path_passage(o.path, o.times, h, a_roll) for o, h in obs])
+        self.S_, self.R_ = H - B, seen - model
+        if len(np.unique(np.round(self.S_, 9), axis=0)) >= 2:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                self._gp = GPRModel(n_restarts=1, random_state=0).fit(self.S_, self.R_)
+        return self
+
+    def __call__(self, S) -> np.ndarray:
+        """The residual (side distance [m], squared speed [m^2/s^2]) at situations S (n, 2)."""
+        S = np.atleast_2d(np.asarray(S, float))
+        if len(self.R_) == 0:
+            return np.zeros((len(S), 2))
+        if self._gp is None:
+            return np.tile(self.R_.mean(axis=0), (len(S), 1))
+        return self._gp.predict(S)
 
 
 def matching_shots(green: Green, balls, holes, alphas, kappas, iterations: int = 8,
-                   tolerance=(0.003, 0.01)) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                   tolerance=(0.003, 0.01), residual=None
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The hits on the estimated green whose balls pass their holes as the given hits' balls
     pass them on the nominal green: at the same side distance and the same speed
     (:func:`hole_passage`): (alpha [rad], kappa, converged) per ball; where Newton's method
@@ -505,7 +557,9 @@ def matching_shots(green: Green, balls, holes, alphas, kappas, iterations: int =
     The given hits are the taught ones: they sink on the nominal green, so hits that cross
     the hole in the same way sink on the estimated one; on a green equal to the nominal they
     are returned unchanged. Newton's method on (alpha, log kappa), all balls at once, with
-    finite differences and steps of at most 5 deg and 20 % in kappa.
+    finite differences and steps of at most 5 deg and 20 % in kappa. ``residual``
+    (:class:`PassageResidual`, optional): what the green still gets wrong, subtracted from the
+    passage aimed at (so that the world's ball passes as the nominal one).
     """
     balls = np.atleast_2d(np.asarray(balls, float))
     holes = np.atleast_2d(np.asarray(holes, float))
@@ -513,6 +567,8 @@ def matching_shots(green: Green, balls, holes, alphas, kappas, iterations: int =
     L0 = np.log(np.asarray(kappas, float).ravel())
     nominal = Green(green.nominal, green.stroke)
     goal = hole_passage(nominal, balls, holes, A0, np.exp(L0))
+    if residual is not None:
+        goal = goal - residual(holes - balls)
     tol = np.asarray(tolerance, float)
     A, L = A0.copy(), L0.copy()
     n, ha, hl = len(A), 2e-3, 2e-3
@@ -595,7 +651,8 @@ def adapt(scene: Scene, world: World, base, data: HittingDataset, budget: int,
     cand = scene.field.situations.sample(int(n_candidates), rng)
     spread = np.ptp(cand[1] - cand[0], axis=0)
     scale = np.where(spread > 1e-9, spread, 1.0)
-    played, observations = [], []
+    played, observations, holes_seen = [], [], []
+    residual = PassageResidual()
     for k in range(int(budget)):
         i = next_situation(cand, np.array(played).reshape(-1, 2), scale)
         ball, hole = cand[0][i], cand[1][i]
@@ -603,7 +660,7 @@ def adapt(scene: Scene, world: World, base, data: HittingDataset, budget: int,
         a_deg, kap = model.taught(s[None])[0]
         if observations:   # the taught shot, corrected for the green estimated so far
             a1, k1, _ = matching_shots(green, ball[None], hole[None], [np.deg2rad(a_deg)],
-                                       [kap])
+                                       [kap], residual=residual)
             a_deg, kap = float(np.rad2deg(a1[0])), float(k1[0])
         shot = Shot(ball, hole, float(np.deg2rad(a_deg)), float(kap), method=method, index=k)
         res = play_shot(world_scene, shot, engine=world.engine)
@@ -611,23 +668,26 @@ def adapt(scene: Scene, world: World, base, data: HittingDataset, budget: int,
         obs = Observation.from_result(res)
         if obs is not None:
             observations.append(obs)
+            holes_seen.append(hole)
             green = estimate_green(green, observations)
+            residual = PassageResidual().fit(green, observations, holes_seen)
         miss = 0.0 if res.sunk else float(np.linalg.norm(res.final_position - hole))
         out.steps.append(AdaptationStep(res, green.q.copy(), miss))
         if k + 1 in keep:
             out.snapshots[k + 1] = _learn_correction(CorrectedModel(base, fixed), green, data,
-                                                     n_teach)
+                                                     n_teach, residual)
         if progress is not None:
             progress(f"adaptation shot {k + 1}/{budget} ({method}): "
                      + ("sunk" if res.sunk else res.reason) + f"; green: {green.describe()}")
-    _learn_correction(model, green, data, n_teach)
+    _learn_correction(model, green, data, n_teach, residual)
     out.green = green
+    out.residual = residual
     out.snapshots[int(budget)] = model
     return out
 
 
 def _learn_correction(model: CorrectedModel, green: Green, data: HittingDataset,
-                      n_teach: int) -> CorrectedModel:
+                      n_teach: int, residual: PassageResidual | None = None) -> CorrectedModel:
     """The correction over the situations: the teacher's good shots at ``n_teach`` of the data
     set's situations (equally spaced) moved onto the estimated green (:func:`matching_shots`),
     less the taught model's predictions there, learned by the model's GPR; returns
@@ -635,7 +695,7 @@ def _learn_correction(model: CorrectedModel, green: Green, data: HittingDataset,
     idx = np.unique(np.linspace(0, len(data) - 1, min(int(n_teach), len(data))).round()
                     .astype(int))
     A1, K1, ok = matching_shots(green, data.ball[idx], data.hole[idx], data.alpha[idx],
-                                data.kappa[idx])
+                                data.kappa[idx], residual=residual)
     # against the taught model's own predictions there: the correction also takes out the
     # model's error at these situations (GMR smooths the teacher's shots)
     T = model.taught(data.situations[idx])
