@@ -46,7 +46,7 @@ fig, axes = plt.subplots(1, 2, figsize=(10, 3.8), sharey=True)
 for ax, how in zip(axes, ("strength", "median")):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
-        model = SEDS(3 if args.quick else 4, random_state=0,
+        model = SEDS(3 if args.quick else 4, objective="direction", random_state=0,
                      speed_calibration=how).fit(demos).model_
     X = np.concatenate(demos.positions)
     V = np.concatenate(demos.velocities)
