@@ -4,32 +4,33 @@ a green slower or faster than its model, a tilted table, a contact that is not t
 model).
 
 The robot is taught on the nominal field (Section 5: the teacher's good shots, then GPR or
-GMR, Eq. 17-18). On the world it observes of each shot only what a camera would give: where the
-ball stopped and whether it was sunk. With a budget of ``N`` shots it corrects its taught model
-as follows.
+GMR, Eq. 17-18). On the world it observes of each shot only what a camera would give
+(:class:`Observation`): the ball's path with its time stamps, where it stopped, whether it
+sank. With a budget of ``N`` shots (:func:`adapt`):
 
-1. **Where to shoot** (:func:`next_situation`): the situation farthest from every situation
-   already played (greedy maximin over candidates drawn from the field's declared situations,
-   in situation coordinates scaled by their spread). With a stationary kernel the correction's
-   posterior variance depends only on the distances to the observed situations, so this is
-   where the correction is least known, without trusting hyperparameters fitted on a handful of
-   shots. The first shot goes to the centre of the declared situations.
-2. **What it learns from a shot** (:meth:`EndPointModel.equivalent`): the parameters
-   theta' = (alpha', kappa') with which the *nominal* ball model (the robot's measured launch,
-   :class:`~seds_casadi.minigolf.stroke.LaunchTable`, on the nominal field with the hole left
-   out) ends where the world's ball ended. The world then behaves locally like the model with
-   the parameters shifted by c = theta' - theta (in alpha and log kappa: a slower green is a
-   speed gain that is too small by a factor, a tilt an angle that is off). The good shot on the
-   world is the teacher's good shot on the model moved back by that shift:
-   theta* = theta_teacher(s) - c (the teacher of the nominal field at this situation,
-   :meth:`~seds_casadi.minigolf.teacher.Teacher.good_shot`). A sunk ball says the played
-   parameters are good: theta* = theta.
-3. **The correction** (:class:`CorrectedModel`): the taught model plus a residual, learned by
-   GPR (Eq. 17; a squared-exponential kernel, its prior mean the mean correction so far) on the
-   differences theta* - theta_taught(s) in (alpha [deg], log kappa). One shot gives a constant
-   correction; where no shot was played the correction returns to the mean. A speed gain that
-   the teacher held fixed (``fixed_speed``) is corrected as well: a fixed speed cannot sink a
-   ball on a faster green.
+1. **Where to shoot** (:func:`next_situation`): the declared situation farthest from every
+   situation already played (greedy maximin over candidates drawn from the field's
+   declaration, in situation coordinates scaled by their spread; the first at the centre).
+   With a stationary kernel the correction's posterior variance depends only on these
+   distances, so this is where the correction is least known, without trusting
+   hyperparameters fitted on a handful of shots.
+2. **The green, estimated** (:class:`Green`, :func:`estimate_green`): the rolling
+   resistance's factor, a tilt, the launch speed's factor and its angle
+   (:data:`GREEN_PARAMETERS`) that make the nominal ball model, with the robot's measured
+   launch (:class:`~seds_casadi.minigolf.stroke.LaunchTable`), reproduce the observed paths;
+   least squares, regularised towards the nominal green (:data:`GREEN_PRIOR`).
+3. **What the green model still gets wrong** (:class:`PassageResidual`): the observed balls'
+   passage of the hole (:func:`path_passage`: the side distance and the squared speed where
+   the path passes nearest to the hole) less the estimated green's for the same hits, learned
+   over the situations by GPR (Eq. 17). Near zero on a world the five parameters describe.
+4. **How it plays** (:func:`matching_shots`): the taught shot moved onto the estimated green
+   by Newton's method on (alpha, log kappa), until its ball passes the hole as the taught
+   shot's ball passes it on the nominal green (less the residual). A shot that sinks on the
+   nominal green then sinks on the world; on a green equal to the nominal nothing changes.
+5. **What it learns** (:class:`CorrectedModel`): the taught model plus a correction in
+   (alpha [deg], log kappa), learned by GPR from the teacher's shots at 24 of the data set's
+   situations moved onto the estimated green, less the taught model's predictions there. A
+   speed gain that the teacher held fixed (``fixed_speed``) is corrected as well.
 
 :func:`adapt` runs the loop; ``seds-casadi play --world WORLD --adapt N`` uses it
 (:mod:`seds_casadi.app.play`).
