@@ -228,3 +228,11 @@ def test_the_hitting_motion_keeps_the_settings_it_had(approach_ratio):
     s = SEDSSettings.from_params(SEDS(3, random_state=0, **opts).get_params(), n_dims=3)
     assert s.problem == ProblemSettings(3, objective="direction", random_state=0)
     assert s.k_candidates is None and s.speed_calibration == "median"
+
+
+@pytest.mark.parametrize("smoothing", [-5, 10**6, 2.5, True, "3"])
+def test_smoothing_with_no_meaning_is_refused(smoothing):
+    d = decaying_spiral_demos()
+    with pytest.raises(ValueError, match="smoothing must be a whole number"):
+        Demonstrations(d.positions, dt=d.estimated_dt(), smoothing=smoothing)
+    Demonstrations(d.positions, dt=d.estimated_dt(), smoothing=5)  # a valid width still works

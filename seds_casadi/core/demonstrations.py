@@ -226,6 +226,11 @@ class Demonstrations:
         shift_each: bool = True,
     ) -> None:
         pos = _check_positions(_as_demo_list(positions, "positions"))
+        shortest = min(len(p) for p in pos)
+        if (isinstance(smoothing, bool) or not isinstance(smoothing, int | np.integer)
+                or not 0 <= int(smoothing) <= shortest):
+            raise ValueError(f"smoothing must be a whole number of samples in 0..{shortest} (the "
+                             f"shortest demonstration's length; 0 or 1: none), got {smoothing!r}")
         self.dt: float | None = None
         if dt is not None and (velocities is not None or times is None):
             self.dt = self._check_dt(dt)
