@@ -281,7 +281,7 @@ def _field_spec(**changes) -> dict:
 
 @pytest.mark.parametrize("surface, match", [
     ({"shape": "plane", "slope_x": 1e6, "slope_y": 0.0}, r"rises 1e\+06 m per metre"),
-    ({"shape": "plane", "slope_x": 0.8, "slope_y": 0.8}, r"rises 1.13 m per metre"),
+    ({"shape": "plane", "slope_x": 8.0, "slope_y": 8.0}, r"rises 11.3 m per metre"),
     # steps 0.1 mm and 0.1 um wide, centred between the 1 cm grid's lines (the grid saw them
     # nearly flat: 2 /m and 1e-5 /m, against the 47 /m of the ball's radius)
     ({"shape": "arctan", "height": 0.002, "steepness": 1e4, "y0": 0.005},
@@ -294,7 +294,7 @@ def _field_spec(**changes) -> dict:
     ({"shape": "rough", "amplitude": 1e-4, "width": 2e-4, "bumps": 30}, "curves with a radius"),
 ])
 def test_surfaces_no_ball_can_roll_on_are_refused(surface, match):
-    """Slopes beyond 45 deg, and steps or bumps curved tighter than the ball however narrow:
+    """Slopes beyond 84 deg (walls), and steps or bumps curved tighter than the ball however narrow:
     the curvature check sampled a 1 cm grid (and a hill 0.1 mm wide made it allocate 47 GB)."""
     from seds_casadi.minigolf.fields import Field
 
