@@ -518,8 +518,10 @@ class PassageResidual:
         self._gp = None
 
     def fit(self, green: Green, observations: list[Observation], holes) -> PassageResidual:
-        """From the observations (not sunk or sunk alike) and their holes, on ``green``."""
-        obs = [(o, h) for o, h in zip(observations, holes) if o is not None]
+        """From the observations of balls that did not sink and their holes, on ``green`` (a
+        sunk ball's path ends where it dropped, at the hole's edge: its passage is not
+        observed)."""
+        obs = [(o, h) for o, h in zip(observations, holes) if o is not None and not o.sunk]
         self._gp = None
         if not obs:
             self.S_, self.R_ = np.zeros((0, 2)), np.zeros((0, 2))
