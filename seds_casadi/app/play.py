@@ -52,7 +52,7 @@ from ..minigolf.strategies import StrategySet, explore
 from ..minigolf.strategy_choice import StrategyChoice
 from ..minigolf.stroke import Stroke
 from ..minigolf.table1 import N_COMPONENTS, training_indices
-from ..minigolf.teacher import teacher_ranges
+from ..minigolf.teacher import Teacher, teacher_ranges
 from ..motion.hitting import HittingMotion, HittingMotionLearner
 from ..motion.putting_demos import load_hitting_demos
 from ..robots.models import load_robot, robot_names
@@ -217,7 +217,9 @@ def _measure_launch(cfg: PlayConfig, scene: Scene, times: dict) -> Scene:
     (:func:`~seds_casadi.game.launch.calibrate_launch`): the scene the teacher searches."""
     t = time.perf_counter()
     arange, krange = teacher_ranges(scene.field)
-    table = calibrate_launch(scene)
+    # an arm too slow for the field is refused on the first grid, before its refinement
+    table = calibrate_launch(scene, check=lambda t: Teacher(scene.field,
+                                                             scene.stroke.with_launch(t)))
     times["the robot's launch"] = time.perf_counter() - t
     f = table.speed_factor[table.speed_factor > 0]
     _LOG.info("the %s's launch: %.2f-%.2f x the commanded club speed over alpha %g..%g deg, "

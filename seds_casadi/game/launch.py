@@ -24,7 +24,8 @@ REFINE_TOLERANCE = 0.005
 
 
 def calibrate_launch(scene: Scene, alpha_range=None, kappa_range=None, n_alpha: int = 7,
-                     n_kappa: int = 7, ball=None, refine: int = 1) -> LaunchTable:
+                     n_kappa: int = 7, ball=None, refine: int = 1,
+                     check=None) -> LaunchTable:
     """Measure the scene robot's launch over a grid of hitting parameters.
 
     A measurement, not a learner: a pure function of the scene that returns a value (the
@@ -51,6 +52,9 @@ def calibrate_launch(scene: Scene, alpha_range=None, kappa_range=None, n_alpha: 
         the grid. An arm whose speed saturates in the grid (its launch's knee, e.g. the xArm7
         at kappa 1.2-1.5) otherwise gets a table 2-4 % off near the knee, and the teacher's
         shots there miss; a smooth launch costs only the centres' swings.
+    check : callable, optional
+        Called with the first grid's table before any refinement (e.g. the teacher's launch
+        speed check): an arm it refuses is refused without the refinement's swings.
 
     Returns
     -------
@@ -110,6 +114,8 @@ def calibrate_launch(scene: Scene, alpha_range=None, kappa_range=None, n_alpha: 
         return m[..., 0], m[..., 1]
 
     factor, offset = table(alphas, kappas)
+    if check is not None and np.any(factor > 0):
+        check(LaunchTable(alphas, kappas, factor, offset, str(scene.robot)))
     for _ in range(max(int(refine), 0)):
         if not np.any(factor > 0):
             break
