@@ -2,8 +2,10 @@
 the shipped URDFs (Barrett WAM, Katana; :mod:`.urdf`) and example-robot-data arms
 (:mod:`.models`), the club (:mod:`.club`), and the 500 Hz controller (damped-least-squares IK,
 inverse dynamics; :mod:`.controller`, with :mod:`.orientation`) that executes the hitting
-motion, the start placement (:mod:`.placement`) and swings simulated on the forward dynamics
-(:mod:`.swing`, :mod:`.dynamics`). It imports :mod:`seds_casadi.motion` and the layers below it.
+motion, the start placement (:mod:`.placement`), swings simulated on the forward dynamics
+(:mod:`.swing`, :mod:`.dynamics`) and the joints' velocity limits' bound on the club speed at a
+hit (:mod:`.speed_bound`, a linear program). It imports :mod:`seds_casadi.motion` and the layers
+below it.
 """
 
 try:
