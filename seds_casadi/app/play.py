@@ -41,7 +41,8 @@ from ..core._io import atomic_csv, atomic_text
 from ..core.demo_files import load_demonstrations
 from ..game.adapt import World, adapt
 from ..game.launch import calibrate_launch
-from ..game.reach import check_reach, check_swing_accuracy, fastest_gain
+from ..game.reach import (check_launch_reach, check_reach, check_swing_accuracy,
+                          fastest_gain)
 from ..game.scene import Scene
 from ..game.shot import Shot, play_round, play_shot
 from ..minigolf._progress import progress_bar
@@ -244,6 +245,7 @@ def _learn_and_teach(cfg: PlayConfig, fld, times: dict):
     _LOG.info("the %s swings within 2 %% of the commanded speed up to kappa %.2f (%.2f m/s)",
               cfg.robot, fastest, fastest * motion.hitting_speed)
     scene = Scene(cfg.robot, fld, motion)
+    check_launch_reach(scene, fastest)   # an arm too slow for the field: refused here
     _, krange = teacher_ranges(fld)
     check_swing_accuracy(scene, fld.teacher.get("kappa", min(max(1.0, krange[0]), fastest)))
     times["reach, speed and accuracy checks"] = time.perf_counter() - t1
