@@ -182,6 +182,8 @@ def test_the_katana_is_refused_on_the_long_fields_with_what_it_lacks(motion):
             ("ceiling", msg.split("a launch of at most ")[1].split(" m/s")[0]))}
         assert f"the katana cannot putt far enough on {name}" in msg
         assert "9 of the 9 declared ball positions need a faster launch" in msg
+        assert "(swung at kappa 2.4 it misses the ball)" in msg
+        assert "(joints 3, 5 at their limits)" in msg
         assert nums["club"] == pytest.approx(k * motion.hitting_speed, rel=0.03)
         assert nums["club"] < nums["bound"] < 1.0
         assert nums["launch"] < nums["ceiling"] < nums["need"]

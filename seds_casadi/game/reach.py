@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..minigolf.ball import simulate_shots
+from ..minigolf.teacher import teacher_ranges
 from ..motion.golf import BALL_RADIUS
 from ..motion.rotation import rotation_z
 from ..robots.placement import place_head, place_robot
@@ -175,7 +176,8 @@ def slowest_sink(field, balls, hole, max_speed: float = 5.0, speed_step: float =
     return out
 
 
-def check_launch_reach(scene, kappa: float, max_short: float = 0.5) -> None:
+def check_launch_reach(scene, kappa: float, max_short: float = 0.5,
+                       top_kappa: float | None = None) -> None:
     """Before teaching: the robot's fastest accurate swing launches the ball fast enough for the
     field. ``ValueError`` when it is too slow for more than ``max_short`` of the declared ball
     positions (a 3 x 3 spread over a region, nine points along a slider), saying what it lacks.
@@ -188,6 +190,11 @@ def check_launch_reach(scene, kappa: float, max_short: float = 0.5) -> None:
     and the physical ceiling at the hit: the joints' velocity limits' bound on the club speed
     there (:func:`~seds_casadi.robots.speed_bound.hitting_speed_bound`) and the launch it would
     give. An arm that misses the ball is left to :func:`check_swing_accuracy`.
+
+    A swing faster than ``kappa`` is inaccurate in speed but its launch is measured for the
+    teacher all the same (:func:`~seds_casadi.game.launch.calibrate_launch`): before refusing,
+    the robot swings once more at ``top_kappa`` (default the top of the field's teacher's
+    ``kappa_range``), and that launch counts when the swing stays within 2 deg of the aim.
     """
     from .shot import swing_launch
 
@@ -210,6 +217,23 @@ def check_launch_reach(scene, kappa: float, max_short: float = 0.5) -> None:
     short = int(np.sum(~np.isfinite(need)))
     if short <= max_short * len(balls):
         return
+    top = float(teacher_ranges(fld)[1][1] if top_kappa is None else top_kappa)
+    faster = ""
+    if top > kappa:
+        sw2, launch2 = swing_launch(scene, ball, alpha, top, {"rest_time": 0.0})
+        if launch2 is None:
+            faster = f" (swung at kappa {top:g} it misses the ball)"
+        elif sw2.direction_error_deg > 2.0:
+            faster = (f" (swung at kappa {top:g} it goes {sw2.direction_error_deg:.0f} deg off "
+                      f"the aim)")
+        else:
+            speed2 = float(np.linalg.norm(launch2))
+            faster = f" (swung at kappa {top:g} at {speed2:.2f} m/s)"
+            if speed2 > speed:
+                need = slowest_sink(fld, balls, hole, max_speed=speed2)
+                short = int(np.sum(~np.isfinite(need)))
+                if short <= max_short * len(balls):
+                    return
     # the field's need at the probed ball (beyond the robot's launch) and how far it rolls
     need_here = float(slowest_sink(fld, ball[None], hole, max_speed=6.0, speed_step=0.02)[0])
     rolled = simulate_shots(fld, ball[None], launch[None], hole=hole).final_position[0]
@@ -230,11 +254,20 @@ def check_launch_reach(scene, kappa: float, max_short: float = 0.5) -> None:
     raise ValueError(
         f"the {scene.robot} cannot putt far enough on {fld.name}: its fastest accurate swing "
         f"(within 2 % of the commanded speed: kappa {kappa:.2f}, a club speed of {club:.2f} m/s "
-        f"at ball {np.round(ball, 3).tolist()}) launches the ball at {speed:.2f} m/s, which "
-        f"rolls {np.linalg.norm(rolled - ball):.2f} m of the {dist:.2f} m to the hole; "
+        f"at ball {np.round(ball, 3).tolist()}) launches the ball at {speed:.2f} m/s{faster}, "
+        f"which rolls {np.linalg.norm(rolled - ball):.2f} m of the {dist:.2f} m to the hole; "
         f"{short} of the {len(balls)} declared ball positions need a faster launch, this one "
         f"{needs}. At the hit the joints' velocity limits allow at most {bound.speed:.2f} m/s "
-        f"of club speed along the hit (joints "
-        f"{', '.join(str(j + 1) for j in bound.saturated) or 'none'} at their limits), a "
+        f"of club speed along the hit ({_joints(bound.saturated)}), a "
         f"launch of at most {ceiling:.2f} m/s: {verdict}. Declare situations nearer the hole "
         f"(or a field sized for this arm), a faster green, or use another robot")
+
+
+def _joints(saturated) -> str:
+    """'joint 3 at its limit', 'joints 3, 5 at their limits' (1-based)."""
+    names = [str(j + 1) for j in saturated]
+    if not names:
+        return "no joint at its limit"
+    if len(names) == 1:
+        return f"joint {names[0]} at its limit"
+    return f"joints {', '.join(names)} at their limits"
