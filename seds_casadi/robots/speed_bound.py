@@ -51,8 +51,8 @@ class SpeedBound:
 def held_rows(robot: Robot, J: np.ndarray) -> np.ndarray:
     """The angular rows of the field-frame Jacobian ``J`` (6, nv) that the controller holds at
     zero for the face: all three for arms with six or more joints, the z row (the turn about
-    the vertical) for five-joint arms (:func:`seds_casadi.robots.orientation.
-    orientation_error_sx`)."""
+    the vertical) for five-joint arms
+    (:func:`~seds_casadi.robots.orientation.orientation_error_sx`)."""
     return J[3:] if robot.nv >= 6 else J[5:6]
 
 
