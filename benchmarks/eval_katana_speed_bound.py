@@ -145,7 +145,11 @@ def main() -> None:
         d = np.array([*(hole - b), 0.0])
         d /= np.linalg.norm(d)
         z = BALL_RADIUS + float(fld.surface.height(b[None])[0])
-        q = place_head(r, np.array([*b, z]) - BALL_RADIUS * d, d)
+        try:
+            q = place_head(r, np.array([*b, z]) - BALL_RADIUS * d, d)
+        except ValueError as exc:
+            print(f"  ball {np.round(b, 2).tolist()}: {exc}")
+            continue
         bound = hitting_speed_bound(r, q, d)
         n = r.head_pose(q)[1][:, 0]
         m = effective_mass(r, q, n)
