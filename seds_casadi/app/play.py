@@ -41,8 +41,7 @@ from ..core._io import atomic_csv, atomic_text
 from ..core.demo_files import load_demonstrations
 from ..game.adapt import World, adapt
 from ..game.launch import calibrate_launch
-from ..game.reach import (check_launch_reach, check_reach, check_swing_accuracy,
-                          fastest_gain)
+from ..game.reach import check_launch_reach, check_reach, check_swing_accuracy, fastest_gain
 from ..game.scene import Scene
 from ..game.shot import Shot, play_round, play_shot
 from ..minigolf._progress import progress_bar
