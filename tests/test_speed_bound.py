@@ -202,3 +202,17 @@ def test_check_launch_reach_refuses_bad_settings(motion):
         check_launch_reach(scene, 0.0)
     with pytest.raises(ValueError, match="max_short must be"):
         check_launch_reach(scene, 0.7, max_short=1.0)
+
+
+def test_play_refuses_the_katana_on_flat_before_teaching(tmp_path):
+    # issue 28: refused with the measured numbers, nothing taught or written to models/
+    from seds_casadi.app.play import play
+
+    out = tmp_path / "o"
+    with pytest.raises(ValueError, match=r"the katana cannot putt far enough on flat: .* "
+                                         r"launches the ball at 1\.1\d m/s .* need a faster "
+                                         r"launch, this one at least 1\.9\d m/s") as err:
+        play(robot="katana", field="flat", shots=20, validate_shots=0, out=str(out),
+             progress=False, cache=False)
+    assert "no controller sinks these putts from this base" in str(err.value)
+    assert not (out / "models" / "dataset_flat.npz").exists()

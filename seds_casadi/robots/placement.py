@@ -84,6 +84,14 @@ def place_robot(name: str, ball_xy, field=None, **kwargs) -> Robot:
 
 
 def default_base(name: str) -> tuple:
-    """A base placement beside a ball at the origin, the robot facing the field's -y side."""
+    """A base placement beside a ball at the origin, the robot facing the field's -y side:
+    (x, y, z, yaw) [m, rad].
+
+    The Katana's (0.45 m to +y, 0.1 m up) lets its joints' velocity limits give at most
+    0.87-0.89 m/s of club speed along a hit towards +x, a launch of at most 1.41 m/s
+    (:func:`~seds_casadi.robots.speed_bound.hitting_speed_bound`); no base up to 0.1 m high
+    gives more than 1.78 m/s, short of the 1.9-2.1 m/s the 3.3 m ``flat`` field needs
+    (``benchmarks/eval_katana_speed_bound.py``): the base is kept, sized for the Katana's own
+    green."""
     return {"wam": (0.0, 0.55, 0.0, -np.pi / 2), "katana": (0.0, 0.45, 0.1, -np.pi / 2)}.get(
         name, (0.0, 0.5, 0.0, -np.pi / 2))
