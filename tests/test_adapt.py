@@ -25,6 +25,8 @@ from seds_casadi.game.adapt import (  # noqa: E402
     check_world,
     estimate_green,
     hole_passage,
+    launch_ceiling,
+    launch_limited,
     matching_shots,
     next_situation,
     world_names,
@@ -124,6 +126,32 @@ def test_matched_shots_sink_on_the_true_green():
                        atol=0.02)
 
 
+def test_an_arm_whose_swing_saturates_is_not_asked_for_more():
+    """Known answer: a launch that grows with the gain up to 1.2 and no further (an arm at its
+    joints' speed limits) has its ceiling at 1.2; on a green twice as slow the matched hits
+    stay at or below it, do not converge, and are said to be held back by the arm."""
+    kappas = np.array([0.4, 0.8, 1.2, 1.6, 2.0, 2.6])
+    factor = 1.5 * np.minimum(kappas, 1.2) / kappas
+    table = LaunchTable(np.deg2rad([-40.0, 40.0]), kappas, np.tile(factor[:, None], (1, 2)),
+                        np.zeros((6, 2)), "saturating arm")
+    stroke = Stroke(np.array([1.0, 0.0, 0.0]), 1.0, launch_table=table)
+    assert launch_ceiling(stroke) == pytest.approx(1.2)
+    assert launch_ceiling(STROKE) == pytest.approx(2.6)   # a launch that keeps growing
+    nominal = _flat()
+    balls = np.array([[0.0, 0.0], [0.1, 0.2]])
+    holes = np.array([[1.5, 0.0], [1.6, 0.1]])   # the hits below pass them on the nominal
+    a, k = np.array([0.0, -0.06]), np.array([1.1, 1.1])
+    assert np.all(hole_passage(Green(nominal, stroke), balls, holes, a, k)[:, 1] > 0)
+    slow = Green(nominal, stroke, [np.log(2.0), 0, 0, 0, 0])
+    A, K, ok = matching_shots(slow, balls, holes, a, k)
+    assert np.all(K <= 1.2 + 1e-9) and not ok.any()
+    assert launch_limited(slow, balls, holes, A, K).all()
+    # a green only a little slower: the arm can serve it, below its ceiling
+    A, K, ok = matching_shots(Green(nominal, stroke, [np.log(1.1), 0, 0, 0, 0]), balls, holes,
+                              a, k)
+    assert ok.all() and np.all(K > k) and np.all(K <= 1.2 + 1e-9)
+
+
 def test_a_world_must_be_the_same_course():
     arctan = load_field("arctan")
     assert "arctan_stimp8" in world_names()
@@ -211,6 +239,13 @@ def test_a_path_passes_the_hole_at_a_side_distance_and_speed():
     assert off == pytest.approx(0.01) and v2 == pytest.approx(1.0)
     short = path[t <= 1.2]
     off, v2 = path_passage(short, t[t <= 1.2], [1.5, 0.0], 0.5)
-    assert v2 == pytest.approx(-2 * 0.5 * (1.5 - short[-1, 0]))
+    # short: measured against the line from the start to the hole (where it stopped, not its
+    # last heading, which wanders on an uneven green)
+    line = np.array([1.5, 0.0]) - short[0]
+    u = line / np.linalg.norm(line)
+    d = np.array([1.5, 0.0]) - short[-1]
+    assert v2 == pytest.approx(-2 * 0.5 * (d @ u))
+    assert off == pytest.approx(u[0] * d[1] - u[1] * d[0])
+    assert 0.0079 < off < 0.0081   # the hole 1 cm left of the path, less the line's slope
     r = PassageResidual()
     assert np.array_equal(r(np.zeros((3, 2))), np.zeros((3, 2)))

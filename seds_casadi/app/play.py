@@ -39,7 +39,7 @@ from threadpoolctl import threadpool_limits
 
 from ..core._io import atomic_csv, atomic_text
 from ..core.demo_files import load_demonstrations
-from ..game.adapt import World, adapt
+from ..game.adapt import World, adapt, fastest_launch
 from ..game.launch import calibrate_launch
 from ..game.reach import check_launch_reach, check_reach, check_swing_accuracy, fastest_gain
 from ..game.scene import Scene
@@ -367,6 +367,15 @@ def _summary(cfg: PlayConfig, fld, rows: list[dict], n_situations: int, times: d
             lines.append(f"  {m}: {int(a.sunk.sum())} of {len(a.steps)} adaptation shots sunk; "
                          f"the green estimated: "
                          f"{a.green.describe() if a.green else 'as the field'}")
+            n_lim, n_all = getattr(a.model, "limited_", (0, 0))
+            if n_lim and a.green is not None:
+                lines.append(
+                    f"    {n_lim} of the {n_all} taught situations the correction was learned "
+                    f"at need a faster launch than the {cfg.robot}'s "
+                    f"({fastest_launch(a.green):.2f} m/s at its fastest, its swing saturating "
+                    f"at its joints' speed limits) on the estimated green: their balls reach "
+                    f"the hole slower than taught, or stop short, however the robot corrects "
+                    f"(a stronger arm, a faster green or nearer holes would serve them)")
     for m in cfg.learners:
         lines.append(f"  {m}: {rates[m]:.0%} sunk")
         mine = [r for r in rows if r["method"] == m and r["strategy"] != ""]

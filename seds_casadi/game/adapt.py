@@ -55,6 +55,7 @@ from .shot import ENGINES, Shot, ShotResult, play_shot
 __all__ = ["World", "check_world", "Green", "Observation", "estimate_green", "CorrectedModel",
            "Adaptation", "AdaptationStep", "adapt", "next_situation", "GREEN_PARAMETERS",
            "PassageResidual", "hole_passage", "path_passage", "matching_shots",
+           "launch_limited", "fastest_launch", "launch_ceiling",
            "world_names"]
 
 #: what a world may change of its field (the green); everything else is the course
@@ -230,6 +231,10 @@ GREEN_PARAMETERS = ("log_rolling_resistance", "tilt_x", "tilt_y", "log_launch_sp
 GREEN_PRIOR = np.array([0.5, 0.01, 0.01, 0.2, np.deg2rad(3.0)])
 #: the camera's position noise assumed by the fit [m]
 CAMERA_SIGMA = 0.01
+#: where the fit's loss turns from squares to absolute values (soft L1), in camera sigmas: a
+#: path the green's parameters cannot explain (a bump, a launch the table misses near the
+#: arm's speed limit) pulls the estimate linearly, not quadratically
+ROBUST_SCALE = 3.0
 
 
 @dataclass(frozen=True)
@@ -312,7 +317,7 @@ class Green:
         return np.concatenate(out)
 
 
-def estimate_green(green: Green, observations: list[Observation], last: int = 6) -> Green:
+def estimate_green(green: Green, observations: list[Observation], last: int = 10) -> Green:
     """The green's parameters that best explain the observed paths (least squares over the
     ``last`` observations, from the current estimate, regularised towards the nominal field by
     :data:`GREEN_PRIOR`)."""
@@ -324,7 +329,12 @@ def estimate_green(green: Green, observations: list[Observation], last: int = 6)
     scale = GREEN_PRIOR
 
     def fun(z):
-        return Green(green.nominal, green.stroke, z * scale).residuals(obs)
+        r = Green(green.nominal, green.stroke, z * scale).residuals(obs)
+        # soft L1 on the paths' terms (as a residual: rho(r) = r'^2), squares on the prior's
+        c = ROBUST_SCALE
+        m = len(r) - len(GREEN_PARAMETERS)
+        r[:m] = np.sign(r[:m]) * c * np.sqrt(2 * (np.sqrt(1 + (r[:m] / c) ** 2) - 1))
+        return r
 
     # from the last estimate and, unless that fits the paths within the camera's noise, from
     # the nominal green too: a tilt along the line of play and a rolling resistance both slow
@@ -358,6 +368,9 @@ class CorrectedModel:
     S_, D_ : arrays, shapes (m, 2)
         Situations of the adaptation shots and the corrections they imply (alpha [deg],
         log kappa).
+    limited_ : (int, int)
+        Of the situations the correction was learned at, how many the arm's launch cannot
+        serve on the estimated green (:func:`launch_limited`), and how many there were.
     """
 
     def __init__(self, base, fixed_kappa: float | None = None, random_state: int = 0) -> None:
@@ -366,6 +379,7 @@ class CorrectedModel:
         self.random_state = random_state
         self.S_ = np.zeros((0, 2))
         self.D_ = np.zeros((0, 2))
+        self.limited_ = (0, 0)
         self._gp: GPRModel | None = None
 
     def taught(self, S) -> np.ndarray:
@@ -471,8 +485,10 @@ def path_passage(path, times, hole, a_roll: float) -> np.ndarray:
     """How a path (k, 2) with its times (k,) passes the hole: (signed distance from the hole's
     centre to the path where it passes nearest [m], positive with the hole on the path's left;
     the squared speed there [m^2/s^2], or for a ball that stops short of the hole minus
-    2 a_roll d, d its distance short: the squared speed it lacked). Continuous in the hit, so
-    Newton's method can steer it (:func:`matching_shots`)."""
+    2 a_roll d, d its distance short: the squared speed it lacked; the side distance then from
+    where it stopped to the line from its start to the hole). Continuous in the hit (up to
+    the small step where a ball stops abreast of the hole), so Newton's method can steer it
+    (:func:`matching_shots`)."""
     path = np.asarray(path, float)
     h = np.asarray(hole, float)
     if len(path) < 2:
@@ -486,9 +502,15 @@ def path_passage(path, times, hole, a_roll: float) -> np.ndarray:
     u = seg[j] / np.sqrt(L2[j])
     d = h - near[j]
     offset = float(u[0] * d[1] - u[1] * d[0])
-    ahead = float(d @ u)
-    if j == len(seg) - 1 and ahead > 1e-9:   # stopped short of the hole
-        return np.array([offset, -2 * a_roll * ahead])
+    if j == len(seg) - 1:   # nearest where it stopped: short of the hole, or abreast of it
+        # measured against the line from the start to the hole: a slow ball's last heading
+        # wanders on an uneven green, where it stopped does not
+        line = h - path[0]
+        ul = line / max(float(np.linalg.norm(line)), 1e-12)
+        de = h - path[-1]
+        ahead = float(de @ ul)
+        if ahead > 1e-9:
+            return np.array([float(ul[0] * de[1] - ul[1] * de[0]), -2 * a_roll * ahead])
     return np.array([offset, L2[j] / dt[j] ** 2])
 
 
@@ -500,6 +522,50 @@ def hole_passage(green: Green, balls, holes, alphas, kappas) -> np.ndarray:
     a_roll = 5 / 7 * green.field.rolling_resistance * 9.81
     return np.array([path_passage(path, np.arange(len(path)) * dt, h, a_roll)
                      for path, h in zip(res.paths, holes)])
+
+
+#: the least noise the passage residual's GP assumes (side distance [m], squared speed
+#: [m^2/s^2]): the camera's and the green's small-scale unevenness (a bump, a seam), which no
+#: smooth correction can predict and which the GP must not interpolate
+RESIDUAL_NOISE = np.array([0.01, 0.03])
+
+
+class _ZeroMeanGP:
+    """GPR with a zero prior mean (Eq. 17 without output normalisation) for residuals: far
+    from the data it returns to zero (the green model), and it explains scatter below
+    ``noise`` (per output) as noise, not as a wiggly correction. Kernel per output:
+    amplitude^2 RBF (length scales at least a fifth of the data's spread) + white noise of at
+    least ``noise``^2; hyperparameters by maximum likelihood."""
+
+    def __init__(self, noise) -> None:
+        self.noise = np.asarray(noise, float)
+
+    def fit(self, S, Y) -> _ZeroMeanGP:
+        from sklearn.gaussian_process import GaussianProcessRegressor
+        from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
+
+        S, Y = np.atleast_2d(S), np.atleast_2d(Y)
+        spread = np.ptp(S, axis=0)
+        self.active_ = np.flatnonzero(spread > 1e-9)
+        scale = spread[self.active_]
+        self.gps_ = []
+        for j in range(Y.shape[1]):
+            n2 = float(self.noise[j]) ** 2
+            amp = max(float(np.mean(Y[:, j] ** 2)), n2)
+            kernel = (ConstantKernel(amp, (1e-3 * n2, 1e2 * amp))
+                      * RBF(scale, (0.2 * scale.min(), 100 * scale.max()))
+                      + WhiteKernel(n2, (n2, max(1e2 * amp, 2 * n2))))
+            gp = GaussianProcessRegressor(kernel=kernel, normalize_y=False,
+                                          n_restarts_optimizer=1, random_state=0)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                gp.fit(S[:, self.active_], Y[:, j])
+            self.gps_.append(gp)
+        return self
+
+    def predict(self, S) -> np.ndarray:
+        S = np.atleast_2d(S)[:, self.active_]
+        return np.column_stack([gp.predict(S) for gp in self.gps_])
 
 
 class PassageResidual:
@@ -534,9 +600,7 @@ class PassageResidual:
         seen = np.array([path_passage(o.path, o.times, h, a_roll) for o, h in obs])
         self.S_, self.R_ = H - B, seen - model
         if len(np.unique(np.round(self.S_, 9), axis=0)) >= 2:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                self._gp = GPRModel(n_restarts=1, random_state=0).fit(self.S_, self.R_)
+            self._gp = _ZeroMeanGP(RESIDUAL_NOISE).fit(self.S_, self.R_)
         return self
 
     def __call__(self, S) -> np.ndarray:
@@ -550,19 +614,26 @@ class PassageResidual:
 
 
 def matching_shots(green: Green, balls, holes, alphas, kappas, iterations: int = 8,
-                   tolerance=(0.003, 0.01), residual=None
+                   tolerance=(0.003, 0.01), residual=None, max_turn: float = 10.0
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The hits on the estimated green whose balls pass their holes as the given hits' balls
     pass them on the nominal green: at the same side distance and the same speed
-    (:func:`hole_passage`): (alpha [rad], kappa, converged) per ball; where Newton's method
-    did not get within ``tolerance`` (metres, m^2/s^2), its best iterate and False.
+    (:func:`hole_passage`): (alpha [rad], kappa, converged) per ball; where the iteration did
+    not get within ``tolerance`` (metres, m^2/s^2), its best iterate and False.
 
     The given hits are the taught ones: they sink on the nominal green, so hits that cross
     the hole in the same way sink on the estimated one; on a green equal to the nominal they
-    are returned unchanged. Newton's method on (alpha, log kappa), all balls at once, with
-    finite differences and steps of at most 5 deg and 20 % in kappa. ``residual``
-    (:class:`PassageResidual`, optional): what the green still gets wrong, subtracted from the
-    passage aimed at (so that the world's ball passes as the nominal one).
+    are returned unchanged. Gauss-Newton on (alpha, log kappa), all balls at once, with
+    finite differences, Levenberg-Marquardt damping and steps of at most 5 deg and 20 % in
+    kappa; kappa stays within the robot's measured launch, below :func:`launch_ceiling`:
+    where the arm's swing saturates (its joints' speed limits) a faster gain launches no
+    faster and the swing strays from the commanded motion, so the best hit below it is
+    returned (not converged; :func:`launch_limited` says why). The angle stays within
+    ``max_turn`` degrees of the given one (a trust region: a green that differs as a real one
+    does from its model moves a putt by a degree or two; an uneven green's chaotic paths
+    must not carry it further). ``residual``
+    (:class:`PassageResidual`, optional): what the green still gets wrong, subtracted from
+    the passage aimed at (so that the world's ball passes as the nominal one).
     """
     balls = np.atleast_2d(np.asarray(balls, float))
     holes = np.atleast_2d(np.asarray(holes, float))
@@ -573,7 +644,9 @@ def matching_shots(green: Green, balls, holes, alphas, kappas, iterations: int =
     if residual is not None:
         goal = goal - residual(holes - balls)
     tol = np.asarray(tolerance, float)
-    A, L = A0.copy(), L0.copy()
+    kap = green.stroke.launch_table.kappas
+    lo, hi = np.log(kap[0]), np.log(launch_ceiling(green.stroke))
+    A, L = A0.copy(), np.clip(L0, lo, hi)
     n, ha, hl = len(A), 2e-3, 2e-3
     ok = np.zeros(n, bool)
     best = np.full(n, np.inf)
@@ -581,22 +654,77 @@ def matching_shots(green: Green, balls, holes, alphas, kappas, iterations: int =
     for _ in range(int(iterations)):
         E = hole_passage(green, np.vstack([balls] * 3), np.vstack([holes] * 3),
                          np.concatenate([A, A + ha, A]), np.exp(np.concatenate([L, L, L + hl])))
-        F = E[:n] - goal
-        size = np.max(np.abs(F) / tol, axis=1)
+        F = (E[:n] - goal) / tol   # in tolerances: both components count alike
+        # at the arm's ceiling and still short, the speed is out of reach: aim for the side
+        # only (trading side distance for a little speed would send the ball wide)
+        capped = (L >= hi - 1e-9) & (F[:, 1] < -1)
+        size = np.max(np.abs(F), axis=1)
+        size[capped] = np.abs(F[capped, 0])
         better = size < best
         best[better], bA[better], bL[better] = size[better], A[better], L[better]
-        ok = best < 1
-        if ok.all():
+        ok = (best < 1) & ~capped
+        if np.all(ok | (capped & (best < 1))):
             break
-        J = np.stack([(E[n:2 * n] - E[:n]) / ha, (E[2 * n:] - E[:n]) / hl], axis=2)
-        det = J[:, 0, 0] * J[:, 1, 1] - J[:, 0, 1] * J[:, 1, 0]
-        det = np.where(np.abs(det) > 1e-12, det, 1e-12)
-        dA = -(J[:, 1, 1] * F[:, 0] - J[:, 0, 1] * F[:, 1]) / det
-        dL = -(-J[:, 1, 0] * F[:, 0] + J[:, 0, 0] * F[:, 1]) / det
-        move = ~ok
-        A[move] += np.clip(dA[move], -np.deg2rad(5.0), np.deg2rad(5.0))
-        L[move] += np.clip(dL[move], -0.2, 0.2)
+        J = np.stack([(E[n:2 * n] - E[:n]) / ha, (E[2 * n:] - E[:n]) / hl], axis=2) \
+            / tol[None, :, None]
+        F[capped, 1] = 0.0
+        J[capped, 1, :] = 0.0
+        # Levenberg-Marquardt: (J'J + mu diag(J'J)) step = -J'F; mu small where J is well
+        # conditioned (a Newton step), large where a column vanishes (a saturated launch)
+        JtJ = np.einsum("nij,nik->njk", J, J)
+        g = np.einsum("nij,ni->nj", J, F)
+        d = np.maximum(np.diagonal(JtJ, axis1=1, axis2=2), 1e-12)
+        mu = 1e-3
+        M = JtJ + mu * d[:, :, None] * np.eye(2)[None] + 1e-12 * np.eye(2)[None]
+        step = -np.linalg.solve(M, g[:, :, None])[:, :, 0]
+        move = ~(ok | (capped & (best < 1)))
+        A[move] += np.clip(step[move, 0], -np.deg2rad(5.0), np.deg2rad(5.0))
+        A = np.clip(A, A0 - np.deg2rad(max_turn), A0 + np.deg2rad(max_turn))
+        L[move] = np.clip(L[move] + np.clip(step[move, 1], -0.2, 0.2), lo, hi)
     return bA, np.exp(bL), ok
+
+
+def launch_ceiling(stroke: Stroke) -> float:
+    """The largest speed gain at which the robot's measured launch still grows with the gain:
+    above it the arm's swing saturates (its joints' speed limits), a faster gain launches the
+    ball no faster and the swing strays from the commanded motion. From the launch table:
+    the last gain up to which, at every hitting angle, each step of the table's gains
+    raises the launch speed by at least half in proportion."""
+    t = stroke.launch_table
+    A, K = np.meshgrid(t.alphas, t.kappas)
+    club = np.linalg.norm(stroke.with_launch(None).club_velocity(A.ravel(), K.ravel())[:, :2],
+                          axis=1).reshape(A.shape)
+    speed = t.speed_factor * club
+    grows = speed[1:] >= speed[:-1] * (1 + 0.5 * (t.kappas[1:, None] / t.kappas[:-1, None] - 1))
+    i = 0
+    while i < len(t.kappas) - 1 and grows[i].all():
+        i += 1
+    return float(t.kappas[max(i, 1)])
+
+
+def launch_limited(green: Green, balls, holes, alphas, kappas, residual=None) -> np.ndarray:
+    """Whether each hit (alpha [rad], kappa) -- a :func:`matching_shots` result that did not
+    converge -- is held back by the arm: its ball arrives at the hole slower than the taught
+    hit's on the nominal green (or stops short of it) on the estimated green, and its gain is
+    at the robot's :func:`launch_ceiling`."""
+    balls = np.atleast_2d(np.asarray(balls, float))
+    holes = np.atleast_2d(np.asarray(holes, float))
+    A = np.asarray(alphas, float).ravel()
+    K = np.asarray(kappas, float).ravel()
+    nominal = Green(green.nominal, green.stroke)
+    goal = hole_passage(nominal, balls, holes, A, K)
+    if residual is not None:
+        goal = goal - residual(holes - balls)
+    short = hole_passage(green, balls, holes, A, K)[:, 1] < goal[:, 1] - 0.01
+    return short & (K >= launch_ceiling(green.stroke) * 0.995)
+
+
+def fastest_launch(green: Green, alpha: float = 0.0) -> float:
+    """The robot's launch at hitting angle ``alpha`` [rad] and its :func:`launch_ceiling` on
+    the estimated green [m/s]."""
+    V = green.launch_stroke.launch_velocity(np.array([float(alpha)]),
+                                            np.array([launch_ceiling(green.stroke)]))
+    return float(np.linalg.norm(V[0]))
 
 
 def adapt(scene: Scene, world: World, base, data: HittingDataset, budget: int,
@@ -694,15 +822,30 @@ def _learn_correction(model: CorrectedModel, green: Green, data: HittingDataset,
     """The correction over the situations: the teacher's good shots at ``n_teach`` of the data
     set's situations (equally spaced) moved onto the estimated green (:func:`matching_shots`),
     less the taught model's predictions there, learned by the model's GPR; returns
-    ``model``."""
+    ``model`` (``model.limited_``: how many of those situations the arm's launch cannot
+    serve, :func:`launch_limited`; their fastest hit is learned where it is aimed as taught)."""
     idx = np.unique(np.linspace(0, len(data) - 1, min(int(n_teach), len(data))).round()
                     .astype(int))
     A1, K1, ok = matching_shots(green, data.ball[idx], data.hole[idx], data.alpha[idx],
                                 data.kappa[idx], residual=residual)
+    limited = np.zeros(len(idx), bool)
+    aimed = np.zeros(len(idx), bool)
+    if not ok.all():
+        b, h = data.ball[idx][~ok], data.hole[idx][~ok]
+        limited[~ok] = launch_limited(green, b, h, A1[~ok], K1[~ok], residual=residual)
+        # of those, the ones whose side distance was met: the fastest hit, well aimed
+        goal = hole_passage(Green(green.nominal, green.stroke), b, h, data.alpha[idx][~ok],
+                            data.kappa[idx][~ok])[:, 0]
+        if residual is not None:
+            goal = goal - residual(h - b)[:, 0]
+        side = np.abs(hole_passage(green, b, h, A1[~ok], K1[~ok])[:, 0] - goal)
+        aimed[~ok] = side < 0.003
+    model.limited_ = (int(limited.sum()), len(idx))
     # against the taught model's own predictions there: the correction also takes out the
     # model's error at these situations (GMR smooths the teacher's shots)
     T = model.taught(data.situations[idx])
     C = np.column_stack([np.rad2deg(A1) - T[:, 0], np.log(K1 / T[:, 1])])
-    if ok.any():
-        model.fit_correction(data.situations[idx][ok], C[ok])
+    use = ok | (limited & aimed)
+    if use.any():
+        model.fit_correction(data.situations[idx][use], C[use])
     return model
