@@ -146,10 +146,21 @@ def test_an_arm_whose_swing_saturates_is_not_asked_for_more():
     A, K, ok = matching_shots(slow, balls, holes, a, k)
     assert np.all(K <= 1.2 + 1e-9) and not ok.any()
     assert launch_limited(slow, balls, holes, A, K).all()
+    stops = int(np.sum(hole_passage(slow, balls, holes, A, K)[:, 1] < 0))
     # a green only a little slower: the arm can serve it, below its ceiling
     A, K, ok = matching_shots(Green(nominal, stroke, [np.log(1.1), 0, 0, 0, 0]), balls, holes,
                               a, k)
     assert ok.all() and np.all(K > k) and np.all(K <= 1.2 + 1e-9)
+    # the correction learned on the twice slower green counts the situations held back, and
+    # those whose balls stop short even at the arm's fastest hit (the holes 1.5 m away: all)
+    from seds_casadi.game.adapt import _learn_correction
+    from seds_casadi.minigolf.hitting_data import HittingDataset
+
+    data = HittingDataset("flat", "fixed_speed", balls, holes, a, k, stroke)
+    base = make_model("gpr").fit(data.situations, np.rad2deg(a)[:, None])
+    model = _learn_correction(CorrectedModel(base, fixed_kappa=1.1), slow, data, 24)
+    n_limited, n_all, n_short = model.limited_
+    assert (n_all, n_limited, n_short) == (2, 2, stops)
 
 
 def test_a_world_must_be_the_same_course():

@@ -367,15 +367,15 @@ def _summary(cfg: PlayConfig, fld, rows: list[dict], n_situations: int, times: d
             lines.append(f"  {m}: {int(a.sunk.sum())} of {len(a.steps)} adaptation shots sunk; "
                          f"the green estimated: "
                          f"{a.green.describe() if a.green else 'as the field'}")
-            n_lim, n_all = getattr(a.model, "limited_", (0, 0))
+            n_lim, n_all, n_short = a.model.limited_
             if n_lim and a.green is not None:
                 lines.append(
                     f"    {n_lim} of the {n_all} taught situations the correction was learned "
                     f"at need a faster launch than the {cfg.robot}'s "
                     f"({fastest_launch(a.green):.2f} m/s at its fastest, its swing saturating "
-                    f"at its joints' speed limits) on the estimated green: their balls reach "
-                    f"the hole slower than taught, or stop short, however the robot corrects "
-                    f"(a stronger arm, a faster green or nearer holes would serve them)")
+                    f"at its joints' speed limits) on the estimated green: at its fastest their "
+                    f"balls reach the hole slower than taught, {n_short} of them stop short "
+                    f"of it (a stronger arm, a faster green or nearer holes would serve them)")
     for m in cfg.learners:
         lines.append(f"  {m}: {rates[m]:.0%} sunk")
         mine = [r for r in rows if r["method"] == m and r["strategy"] != ""]

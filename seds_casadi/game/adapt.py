@@ -368,9 +368,10 @@ class CorrectedModel:
     S_, D_ : arrays, shapes (m, 2)
         Situations of the adaptation shots and the corrections they imply (alpha [deg],
         log kappa).
-    limited_ : (int, int)
+    limited_ : (int, int, int)
         Of the situations the correction was learned at, how many the arm's launch cannot
-        serve on the estimated green (:func:`launch_limited`), and how many there were.
+        serve on the estimated green (:func:`launch_limited`), how many there were, and how
+        many of the first stop short of the hole even at the arm's fastest hit.
     """
 
     def __init__(self, base, fixed_kappa: float | None = None, random_state: int = 0) -> None:
@@ -379,7 +380,7 @@ class CorrectedModel:
         self.random_state = random_state
         self.S_ = np.zeros((0, 2))
         self.D_ = np.zeros((0, 2))
-        self.limited_ = (0, 0)
+        self.limited_ = (0, 0, 0)
         self._gp: GPRModel | None = None
 
     def taught(self, S) -> np.ndarray:
@@ -838,9 +839,13 @@ def _learn_correction(model: CorrectedModel, green: Green, data: HittingDataset,
                             data.kappa[idx][~ok])[:, 0]
         if residual is not None:
             goal = goal - residual(h - b)[:, 0]
-        side = np.abs(hole_passage(green, b, h, A1[~ok], K1[~ok])[:, 0] - goal)
-        aimed[~ok] = side < 0.003
-    model.limited_ = (int(limited.sum()), len(idx))
+        passage = hole_passage(green, b, h, A1[~ok], K1[~ok])
+        aimed[~ok] = np.abs(passage[:, 0] - goal) < 0.003
+        stops = np.zeros(len(idx), bool)
+        stops[~ok] = passage[:, 1] < 0
+        model.limited_ = (int(limited.sum()), len(idx), int((limited & stops).sum()))
+    else:
+        model.limited_ = (0, len(idx), 0)
     # against the taught model's own predictions there: the correction also takes out the
     # model's error at these situations (GMR smooths the teacher's shots)
     T = model.taught(data.situations[idx])
