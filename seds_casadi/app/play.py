@@ -375,7 +375,7 @@ def _summary(cfg: PlayConfig, fld, rows: list[dict], n_situations: int, times: d
                     f"({fastest_launch(a.green):.2f} m/s at its fastest, its swing saturating "
                     f"at its joints' speed limits) on the estimated green: at its fastest their "
                     f"balls reach the hole slower than taught, {n_short} of them stop short "
-                    f"of it (a stronger arm, a faster green or nearer holes would serve them)")
+                    f"of its edge (a stronger arm, a faster green or nearer holes would serve them)")
     for m in cfg.learners:
         lines.append(f"  {m}: {rates[m]:.0%} sunk")
         mine = [r for r in rows if r["method"] == m and r["strategy"] != ""]

@@ -371,7 +371,7 @@ class CorrectedModel:
     limited_ : (int, int, int)
         Of the situations the correction was learned at, how many the arm's launch cannot
         serve on the estimated green (:func:`launch_limited`), how many there were, and how
-        many of the first stop short of the hole even at the arm's fastest hit.
+        many of the first stop short of the hole's edge even at the arm's fastest hit.
     """
 
     def __init__(self, base, fixed_kappa: float | None = None, random_state: int = 0) -> None:
@@ -629,10 +629,10 @@ def matching_shots(green: Green, balls, holes, alphas, kappas, iterations: int =
     kappa; kappa stays within the robot's measured launch, below :func:`launch_ceiling`:
     where the arm's swing saturates (its joints' speed limits) a faster gain launches no
     faster and the swing strays from the commanded motion, so the best hit below it is
-    returned (not converged; :func:`launch_limited` says why). The angle stays within
-    ``max_turn`` degrees of the given one (a trust region: a green that differs as a real one
-    does from its model moves a putt by a degree or two; an uneven green's chaotic paths
-    must not carry it further). ``residual``
+    returned (not converged; :func:`launch_limited` says why), its angle within ``max_turn``
+    degrees of the given one (a trust region: aiming a ball that arrives too slowly on an
+    uneven green chases chaotic paths; elsewhere the angle is free, as a green far from its
+    model, e.g. a flat guess of the arctan field, needs 30 deg). ``residual``
     (:class:`PassageResidual`, optional): what the green still gets wrong, subtracted from
     the passage aimed at (so that the world's ball passes as the nominal one).
     """
@@ -680,7 +680,9 @@ def matching_shots(green: Green, balls, holes, alphas, kappas, iterations: int =
         step = -np.linalg.solve(M, g[:, :, None])[:, :, 0]
         move = ~(ok | (capped & (best < 1)))
         A[move] += np.clip(step[move, 0], -np.deg2rad(5.0), np.deg2rad(5.0))
-        A = np.clip(A, A0 - np.deg2rad(max_turn), A0 + np.deg2rad(max_turn))
+        # the trust region holds where the speed is out of reach (aiming for the side only)
+        A = np.where(capped, np.clip(A, A0 - np.deg2rad(max_turn), A0 + np.deg2rad(max_turn)),
+                     A)
         L[move] = np.clip(L[move] + np.clip(step[move, 1], -0.2, 0.2), lo, hi)
     return bA, np.exp(bL), ok
 
@@ -842,7 +844,9 @@ def _learn_correction(model: CorrectedModel, green: Green, data: HittingDataset,
         passage = hole_passage(green, b, h, A1[~ok], K1[~ok])
         aimed[~ok] = np.abs(passage[:, 0] - goal) < 0.003
         stops = np.zeros(len(idx), bool)
-        stops[~ok] = passage[:, 1] < 0
+        # short of the hole's edge, not of its centre (a ball that stops over the hole drops)
+        a_roll = 5 / 7 * green.field.rolling_resistance * 9.81
+        stops[~ok] = passage[:, 1] < -2 * a_roll * green.nominal.hole_radius
         model.limited_ = (int(limited.sum()), len(idx), int((limited & stops).sum()))
     else:
         model.limited_ = (0, len(idx), 0)
