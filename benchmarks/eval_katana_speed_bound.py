@@ -35,9 +35,9 @@ import pinocchio as pin
 from scipy.optimize import linprog, minimize
 
 from seds_casadi.game.reach import slowest_sink
-from seds_casadi.minigolf.ball import BALL_MASS, RESTITUTION
+from seds_casadi.minigolf.ball import RESTITUTION
 from seds_casadi.minigolf.fields import load_field
-from seds_casadi.motion import BALL_RADIUS
+from seds_casadi.motion import BALL_MASS, BALL_RADIUS
 from seds_casadi.robots import Club, effective_mass, load_robot, place_head, place_robot
 from seds_casadi.robots.speed_bound import hitting_speed_bound
 
