@@ -646,7 +646,9 @@ def matching_shots(green: Green, balls, holes, alphas, kappas, iterations: int =
         goal = goal - residual(holes - balls)
     tol = np.asarray(tolerance, float)
     kap = green.stroke.launch_table.kappas
-    lo, hi = np.log(kap[0]), np.log(launch_ceiling(green.stroke))
+    # the ceiling, or the taught gain where the teacher already chose one above it
+    lo = np.log(kap[0])
+    hi = np.maximum(np.log(launch_ceiling(green.stroke)), L0)
     A, L = A0.copy(), np.clip(L0, lo, hi)
     n, ha, hl = len(A), 2e-3, 2e-3
     ok = np.zeros(n, bool)
@@ -670,8 +672,9 @@ def matching_shots(green: Green, balls, holes, alphas, kappas, iterations: int =
             / tol[None, :, None]
         F[capped, 1] = 0.0
         J[capped, 1, :] = 0.0
-        # Levenberg-Marquardt: (J'J + mu diag(J'J)) step = -J'F; mu small where J is well
-        # conditioned (a Newton step), large where a column vanishes (a saturated launch)
+        # Levenberg-Marquardt with Marquardt's scaling: (J'J + mu diag(J'J)) step = -J'F, a
+        # small fixed mu: a Newton step where J is well conditioned, a finite one where a
+        # column nearly vanishes (a launch that hardly grows with the gain)
         JtJ = np.einsum("nij,nik->njk", J, J)
         g = np.einsum("nij,ni->nj", J, F)
         d = np.maximum(np.diagonal(JtJ, axis1=1, axis2=2), 1e-12)
@@ -683,7 +686,7 @@ def matching_shots(green: Green, balls, holes, alphas, kappas, iterations: int =
         # the trust region holds where the speed is out of reach (aiming for the side only)
         A = np.where(capped, np.clip(A, A0 - np.deg2rad(max_turn), A0 + np.deg2rad(max_turn)),
                      A)
-        L[move] = np.clip(L[move] + np.clip(step[move, 1], -0.2, 0.2), lo, hi)
+        L[move] = np.clip(L[move] + np.clip(step[move, 1], -0.2, 0.2), lo, hi[move])
     return bA, np.exp(bL), ok
 
 
