@@ -453,3 +453,17 @@ def test_solver_options_reach_ipopt_and_bad_ones_are_refused():
     for bad in ("mu_strategy=adaptive", {1: 2}, {"tol": None}, {"tol": True}):
         with pytest.raises(TypeError, match="solver_options"):
             SEDS(2, solver_options=bad).fit(demos)
+
+
+def test_a_too_coarse_rollout_step_says_what_to_change(spiral_demos):
+    """The step warning names method='rk4' only to a user who is not already using it."""
+    from seds_casadi import ConvergenceWarning
+
+    model = SEDS(2, objective="direction", random_state=0).fit(spiral_demos).model_
+    dt = 10.0 / model.stiffness()
+    start = spiral_demos.positions[0][0]
+    for method, names_rk4 in (("rk4", False), ("euler", True)):
+        with pytest.warns(ConvergenceWarning, match="cannot follow") as rec:
+            model.rollout(start, dt=dt, max_steps=5, method=method, warn=True)
+        text = " ".join(str(w.message) for w in rec)
+        assert ("method='rk4'" in text) is names_rk4

@@ -344,7 +344,13 @@ def _cmd_fit(a) -> int:
     model.save(path)
     starts = [p[0] for p in demos.positions]
     span = max(float(max(abs(p - demos.target).max() for p in demos.positions)), 1e-9)
-    repro = model.rollout(starts, dt=demos.estimated_dt(), tol=1e-3 * span, max_steps=20000)
+    # the demonstrations' sampling step, or a smaller one the model's stiffest component allows
+    # (rk4 is stable below about 2.8 / rate): the figure shows the model, not the integrator
+    dt = demos.estimated_dt()
+    rate = model.stiffness()
+    if rate > 0:
+        dt = min(dt, 1.0 / rate)
+    repro = model.rollout(starts, dt=dt, tol=1e-3 * span, max_steps=200000)
     if demos.n_dims >= 2:
         from .plot_ds import plot_fit_views
 

@@ -333,8 +333,9 @@ class StableDS(CachedFunctionMixin):
             warnings.warn(
                 f"{method} at dt = {dt:g} s cannot follow this model's stiffest component (rate "
                 f"{rate:.3g}/s; stable only for dt < {_STABLE_STEP[method] / rate:.3g} s): "
-                "the rollout may oscillate or diverge. Use a smaller dt, method='rk4', or fit "
-                "with SEDS(gain_limit=...)", ConvergenceWarning, stacklevel=2)
+                "the rollout may oscillate or diverge. Use a smaller dt"
+                + (", method='rk4'," if method != "rk4" else "")
+                + " or fit with SEDS(gain_limit=...)", ConvergenceWarning, stacklevel=2)
         dist0 = _distances(X - self.target)
         if tol is None:
             tol = 1e-3 * max(float(dist0.max()), 1e-12)
