@@ -35,9 +35,9 @@ import pinocchio as pin
 from scipy.optimize import linprog, minimize
 
 from seds_casadi.game.reach import slowest_sink
-from seds_casadi.minigolf.ball import RESTITUTION
+from seds_casadi.minigolf.ball import impact
 from seds_casadi.minigolf.fields import load_field
-from seds_casadi.motion import BALL_MASS, BALL_RADIUS
+from seds_casadi.motion import BALL_RADIUS
 from seds_casadi.robots import Club, effective_mass, load_robot, place_head, place_robot
 from seds_casadi.robots.speed_bound import hitting_speed_bound
 
@@ -46,7 +46,8 @@ BACKSWING = 0.3     # [m] simulate_swing's default start behind the contact poin
 
 
 def launch_factor(m: float) -> float:
-    return (1 + RESTITUTION) * m / (m + BALL_MASS)
+    """|launch| / |club speed| of a central impact with effective mass m (minigolf.ball.impact)."""
+    return float(impact(np.array([1.0, 0.0]), club_mass=m)[0])
 
 
 def acceleration_bound(robot, q, d) -> float:

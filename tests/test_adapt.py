@@ -147,6 +147,9 @@ def test_an_arm_whose_swing_saturates_is_not_asked_for_more():
     assert np.all(K <= 1.2 + 1e-9) and not ok.any()
     assert launch_limited(slow, balls, holes, A, K).all()
     a_roll = 5 / 7 * slow.field.rolling_resistance * 9.81
+    from seds_casadi.game.adapt import fastest_launch
+
+    assert fastest_launch(slow) == pytest.approx(1.5 * 1.2)   # the factor at the ceiling
     stops = int(np.sum(hole_passage(slow, balls, holes, A, K)[:, 1]
                        < -2 * a_roll * nominal.hole_radius))
     # a green only a little slower: the arm can serve it, below its ceiling
