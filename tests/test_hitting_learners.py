@@ -48,6 +48,40 @@ def test_gpr_is_uncertain_far_from_the_data_and_sure_at_it():
     assert v_far[0, 0] > 10 * v_at.max()
 
 
+def test_zero_mean_gpr_is_eq_17a_as_printed():
+    """prior_mean="zero": the prediction is K(s*, S) (K(S, S) + sigma_n I)^-1 alpha with the
+    fitted hyperparameters (Eq. 17a, no mean term), in the outputs' own units."""
+    S, Y = _data(12, seed=3, noise=0.01)
+    Y = Y + np.array([5.0, 0.0])  # an offset that a zero-mean process must carry itself
+    gp = GPRModel(prior_mean="zero").fit(S, Y)
+    St = np.column_stack([np.full(7, 2.4), np.linspace(-0.7, 0.7, 7)])
+    mean, var = gp.predict(St, return_var=True)
+    for j, g in enumerate(gp.gps_):
+        signal, noise = g.kernel_.k1, g.kernel_.k2.noise_level
+        X, Xt = S[:, gp.active_], St[:, gp.active_]
+        K = signal(X) + noise * np.eye(len(X))
+        want = signal(Xt, X) @ np.linalg.solve(K, Y[:, j] / gp.y_scale_[j]) * gp.y_scale_[j]
+        assert np.allclose(mean[:, j], want, atol=1e-8 * np.abs(want).max())
+        assert gp.y_scale_[j] == pytest.approx(np.sqrt(np.mean(Y[:, j] ** 2)))
+    assert np.all(var > 0)
+
+
+def test_far_from_the_data_gpr_returns_to_its_prior_mean():
+    """Section 5.2: GPR "outputs zero far from the training data" with the zero mean of
+    Eq. 17a; with prior_mean="data" it returns to the training outputs' mean instead."""
+    S, Y = _data(10, seed=2)
+    alpha = 10.0 + Y[:, :1]  # angles about 10 deg, varying by +-0.2
+    far = np.array([[2.4, 50.0]])
+    zero = GPRModel(prior_mean="zero").fit(S, alpha).predict(far)[0, 0]
+    data = GPRModel().fit(S, alpha).predict(far)[0, 0]
+    assert abs(zero) < 1e-3
+    assert data == pytest.approx(alpha.mean(), abs=1e-3)
+    # near the data the two agree
+    near = S[:3]
+    assert np.allclose(GPRModel(prior_mean="zero").fit(S, alpha).predict(near),
+                       GPRModel().fit(S, alpha).predict(near), atol=0.02)
+
+
 def test_joint_gmr_keeps_the_correlation_of_the_outputs():
     rng = np.random.default_rng(1)
     s = rng.uniform(-1, 1, 200)
@@ -106,5 +140,7 @@ def test_bad_input():
         GPRModel().fit(np.array([[0.0, np.nan], [1.0, 1.0]]), [1.0, 2.0])
     with pytest.raises(ValueError, match="valid: gpr, gmr, sep_gmr"):
         make_model("svr")
+    with pytest.raises(ValueError, match="prior_mean must be one of data, zero"):
+        GPRModel(prior_mean="mean").fit(*_data(5))
     with pytest.raises(ValueError, match="situations"):
         GPRModel().fit(S, Y[:2])

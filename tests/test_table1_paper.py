@@ -168,6 +168,15 @@ def test_the_paper_protocol_runs_with_the_spread_and_differs_from_the_grid(doubl
     assert all(noisy > clean for noisy, clean in spaced)
     grid, _ = run_table1(data, repetitions=3, seed=1, protocol="grid")
     assert [r.success_rate for r in grid] != [r.success_rate for r in means]
+    # the paper protocol's GPR is Eq. 17a's zero-mean process: naming it changes nothing,
+    # the training outputs' mean changes GPR's rows only
+    zero, _ = run_table1(data, repetitions=3, seed=1, sinking={"double_hill": sink},
+                         gpr_prior_mean="zero")
+    assert [r.rmse_angle for r in zero] == [r.rmse_angle for r in means]
+    mean_prior, _ = run_table1(data, repetitions=3, seed=1, sinking={"double_hill": sink},
+                               gpr_prior_mean="data")
+    changed = {r.model for r, z in zip(mean_prior, means) if r.rmse_angle != z.rmse_angle}
+    assert changed == {"gpr"}
     path = tmp_path / "table1.csv"
     write_table1_csv(means, path)
     with open(path) as fh:
@@ -179,6 +188,8 @@ def test_the_paper_protocol_runs_with_the_spread_and_differs_from_the_grid(doubl
         run_table1(data, repetitions=1, protocol="table")
     with pytest.raises(ValueError, match="noise_spread"):
         run_table1(data, repetitions=1, noise_spread=2.0)
+    with pytest.raises(ValueError, match="gpr_prior_mean must be one of data, zero"):
+        run_table1(data, repetitions=1, gpr_prior_mean="one")
     with pytest.raises(ValueError, match="holds 6 situations, too few for '10 random'"):
         run_table1(data, repetitions=1, sinking={"double_hill": sink}, centre_fraction=0.3)
     with pytest.raises(ValueError, match="sinking set has 3"):

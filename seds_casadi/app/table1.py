@@ -20,6 +20,7 @@ from ..minigolf.parameters import make_model
 from ..minigolf.sinking import SinkingSet
 from ..minigolf.table1 import (
     CENTRE_FRACTION,
+    GPR_PRIOR_MEAN,
     PROTOCOLS,
     TABLE1_FIELDS,
     Table1Row,
@@ -97,7 +98,7 @@ class Table1Config:
 
 def fig10(field_name: str, ds: HittingDataset, n_train: int = 10, ax_row=None,
           sinking: SinkingSet | None = None, seed: int = 0,
-          centre_fraction: float = CENTRE_FRACTION):
+          centre_fraction: float = CENTRE_FRACTION, prior_mean: str | None = None):
     """Fig. 10: GPR and GMR (K = 2) with their two-standard-deviation bands, fitted on
     ``n_train`` points drawn at random from the centred range of a data set along one input
     dimension (the hole along a slider; black crosses), the rest in red, over the input that
@@ -105,6 +106,8 @@ def fig10(field_name: str, ds: HittingDataset, n_train: int = 10, ax_row=None,
 
     With ``sinking`` the examples are one draw from the sinking set (Eq. 15, the ``"paper"``
     protocol of :mod:`seds_casadi.minigolf.table1`), else the teacher's shots as they are.
+    GPR's prior mean (``prior_mean``) defaults to the protocol's
+    (:data:`~seds_casadi.minigolf.table1.GPR_PRIOR_MEAN`: zero with ``sinking``, Eq. 17a).
     """
     S, Y = ds.situations, ds.outputs
     rng = np.random.default_rng(seed)
@@ -112,14 +115,17 @@ def fig10(field_name: str, ds: HittingDataset, n_train: int = 10, ax_row=None,
         Y = sinking.draw(rng)[:, :Y.shape[1]]
     column = int(np.argmax(np.ptp(S, axis=0)))
     train = training_indices(S, n_train, "centred", rng, centre_fraction)
-    models = {f"GPR ({field_name})": make_model("gpr").fit(S[train], Y[train]),
+    if prior_mean is None:
+        prior_mean = GPR_PRIOR_MEAN["paper" if sinking is not None else "grid"]
+    models = {f"GPR ({field_name})": make_model("gpr", prior_mean=prior_mean).fit(S[train],
+                                                                                  Y[train]),
               f"GMR, K=2 ({field_name})": make_model("gmr", n_components=2).fit(S[train],
                                                                                 Y[train])}
     from .plotting import plot_regression_1d
 
     name = "sideways" if column == 1 else "ahead"
     lo, hi = float(S[:, column].min()), float(S[:, column].max())
-    # the input range and a tenth beyond it on each side: the test situations' range
+    # the input range (where the test situations lie) and a tenth beyond it on each side
     query = np.linspace(lo - 0.1 * (hi - lo), hi + 0.1 * (hi - lo), 300)
     return plot_regression_1d(S, Y[:, 0], train, models, ax_row=ax_row, column=column,
                               xlabel=f"hole {name} of the ball, s_{'xy'[column]} [m]",

@@ -8,7 +8,9 @@ learners, chosen by name with :func:`make_model`:
   GaussianProcessRegressor); mean and variance of Eq. 17. Length scales are bounded to
   [0.05, 100] times each input's spread in the training set and the noise to a tenth of the
   outputs' variance, so that tiny training sets are not explained as pure noise; inputs that
-  do not vary in the training set are left out of the kernel.
+  do not vary in the training set are left out of the kernel. The prior mean is the training
+  outputs' mean by default (``prior_mean="data"``); ``prior_mean="zero"`` is Eq. 17a as
+  printed, a zero-mean process that "outputs zero far from the training data" (Section 5.2).
 * ``"gmr"``: one joint GMM over (s, alpha, kappa) fitted by k-means then EM (on the data scaled
   to unit variance per dimension, the result in the data's units), and GMR (Eq. 18) with the
   conditional covariance (the outputs' correlation is kept).
@@ -29,13 +31,15 @@ from ..core._random import sklearn_random_state
 from ..core.gmm import gmr_function, gmr_predict
 
 __all__ = ["GPRModel", "GMRModel", "make_model", "MODELS", "gpr_param_count",
-           "gmm_param_count"]
+           "gmm_param_count", "GPR_PRIOR_MEANS"]
 
 
 #: covariance floor of the GMMs, in units of each dimension's variance (the data are scaled
 #: to unit variance: a floor at 1 % of each dimension's spread; 1e-6 let the two Gaussians of
 #: a 10-point data set collapse, measured on the rough flat field, benchmarks/README.md)
 REG_COVAR = 1e-4
+#: the prior means of :class:`GPRModel`: the training outputs' mean, or zero (Eq. 17a)
+GPR_PRIOR_MEANS = ("data", "zero")
 
 
 def gpr_param_count(n_train: int, n_inputs: int, n_outputs: int) -> int:
@@ -76,11 +80,22 @@ class GPRModel(RegressorMixin, BaseEstimator):
         12.9 against 33.2: a length scale of 2 cm) in 2 of 20 repetitions of arctan's "28
         equally spaced" set, and those repetitions sank 30-40 % instead of 100 %.
     random_state : int, numpy Generator or None, default 0
+    prior_mean : {"data", "zero"}, default "data"
+        The process's mean before the data: ``"data"``, the training outputs' mean (the
+        outputs are centred and scaled to unit variance before the fit); ``"zero"``, zero, as
+        Eq. 17a is printed, g(s*) = K(s*, S) (K(S, S) + sigma_n I)^-1 alpha, so that far from
+        the training data the prediction returns to 0 (the outputs are only scaled, by their
+        root mean square, which leaves the mean at zero). Table 1's ``"paper"`` protocol uses
+        ``"zero"``. The signal variance and the noise are bounded relative to the outputs'
+        scale either way.
 
     Attributes
     ----------
     gps_ : list of sklearn GaussianProcessRegressor
-        One per output.
+        One per output, on the outputs divided by ``y_scale_``.
+    y_scale_ : array, shape (n_out,)
+        The outputs' scale the processes were fitted in (1 with ``prior_mean="data"``: the
+        regressor normalises them itself).
     active_ : array of int
         Inputs that vary in the training set (the others are left out of the kernel).
     n_params_ : int
@@ -89,9 +104,10 @@ class GPRModel(RegressorMixin, BaseEstimator):
 
     name = "gpr"
 
-    def __init__(self, n_restarts: int = 5, random_state=0) -> None:
+    def __init__(self, n_restarts: int = 5, random_state=0, prior_mean: str = "data") -> None:
         self.n_restarts = n_restarts
         self.random_state = random_state
+        self.prior_mean = prior_mean
 
     def fit(self, S, Y) -> GPRModel:
         """Fit on situations S (M, d_in) and outputs Y (M, n_out); returns self."""
@@ -102,7 +118,11 @@ class GPRModel(RegressorMixin, BaseEstimator):
 
         if int(self.n_restarts) < 0:
             raise ValueError(f"n_restarts must be >= 0, got {self.n_restarts}")
+        if self.prior_mean not in GPR_PRIOR_MEANS:
+            raise ValueError(f"prior_mean must be one of {', '.join(GPR_PRIOR_MEANS)}, got "
+                             f"{self.prior_mean!r}")
         S, Y = _check_xy(S, Y, 2, "GPR")
+        zero = self.prior_mean == "zero"
         d = S.shape[1]
         # inputs that do not vary in the training set carry no information (e.g. the distance
         # to the hole when only its sideways position changes): leave them out of the kernel
@@ -113,19 +133,23 @@ class GPRModel(RegressorMixin, BaseEstimator):
         scale = spread[active]
         seed = sklearn_random_state(self.random_state)
         gps = []
+        # "zero": the outputs divided by their root mean square (the mean stays at zero, the
+        # bounds below keep their meaning); "data": the regressor centres and scales them
+        y_scale = (np.sqrt(np.mean(Y**2, axis=0)) if zero else np.ones(Y.shape[1]))
+        y_scale = np.where(y_scale > 0, y_scale, 1.0)
         for j in range(Y.shape[1]):
             kernel = (ConstantKernel(1.0, (1e-2, 1e2))
                       * RBF(length_scale=scale, length_scale_bounds=(0.05 * scale.min(),
                                                                      100 * scale.max()))
                       + WhiteKernel(1e-4, (1e-8, 1e-1)))
-            gp = GaussianProcessRegressor(kernel=kernel, normalize_y=True,
+            gp = GaussianProcessRegressor(kernel=kernel, normalize_y=not zero,
                                           n_restarts_optimizer=int(self.n_restarts),
                                           random_state=seed)
             with warnings.catch_warnings():  # bound warnings on tiny training sets
                 warnings.simplefilter("ignore")
-                gp.fit(S[:, active], Y[:, j])
+                gp.fit(S[:, active], Y[:, j] / y_scale[j])
             gps.append(gp)
-        self.active_, self.gps_ = active, gps
+        self.active_, self.gps_, self.y_scale_ = active, gps, y_scale
         self.n_params_ = gpr_param_count(S.shape[0], d, Y.shape[1])
         self.n_inputs_ = self.n_features_in_ = d
         return self
@@ -135,10 +159,10 @@ class GPRModel(RegressorMixin, BaseEstimator):
         check_is_fitted(self, "gps_")
         S = _check_s(S, self.n_inputs_)[:, self.active_]
         out = [gp.predict(S, return_std=True) for gp in self.gps_]
-        mean = np.column_stack([m for m, _ in out])
+        mean = np.column_stack([m for m, _ in out]) * self.y_scale_
         if not return_var:
             return mean
-        return mean, np.column_stack([s**2 for _, s in out])
+        return mean, np.column_stack([s**2 for _, s in out]) * self.y_scale_**2
 
 
 class GMRModel(RegressorMixin, BaseEstimator):

@@ -18,7 +18,8 @@ describes it, and ``"grid"``, the protocol of this package before (issues 4 and 
    range for the "initial experiment" on the flat and double hill fields only).
 3. RMSE on the remaining examples of the data set (noisy too: the paper's validation data are
    its data set), success on 30 random situations of the whole declared range, played on the
-   ball model; models, counts and repetitions as below.
+   ball model; models, counts and repetitions as below. GPR is Eq. 17a as printed, a
+   zero-mean process (:data:`GPR_PRIOR_MEAN`; ``"grid"`` keeps the training outputs' mean).
 
 The width of the centred range is not given in the text; :data:`CENTRE_FRACTION` = 0.6 (the
 middle 12 of the 20 points) follows from two of its statements. "10 random training points" are
@@ -70,11 +71,12 @@ from ._progress import progress_bar
 from .ball import simulate_shots
 from .fields import Field
 from .hitting_data import HittingDataset
-from .parameters import make_model
+from .parameters import GPR_PRIOR_MEANS, make_model
 from .sinking import SinkingSet, sinking_set
 from .teacher import Teacher
 
 __all__ = ["TRAINING_SETS", "PAPER_TRAINING_SETS", "PROTOCOLS", "CENTRE_FRACTION",
+           "GPR_PRIOR_MEAN",
            "MODELS_BY_OUTPUTS", "PAPER_TABLE1", "TABLE1_FIELDS", "CSV_COLUMNS",
            "run_table1", "format_table1", "write_table1_csv", "training_indices",
            "Table1Row", "protocol", "training_sets", "centred_indices", "paper_conclusions",
@@ -85,6 +87,10 @@ PROTOCOLS = ("paper", "grid")
 #: ``"paper"``: the random training points of a one-dimensional situation space come from the
 #: middle of the input range of this width (a fraction of the range; module docstring)
 CENTRE_FRACTION = 0.6
+#: GPR's prior mean by protocol (:class:`~seds_casadi.minigolf.parameters.GPRModel`):
+#: ``"paper"``, zero, Eq. 17a as printed (no mean term; GPR "outputs zero far from the
+#: training data", Section 5.2); ``"grid"``, the training outputs' mean, as before
+GPR_PRIOR_MEAN = {"paper": "zero", "grid": "data"}
 
 TABLE1_FIELDS = ("rough_flat", "double_hill", "arctan")
 #: Training sets (label, size, kind) by the dimension of the field's situation space: one
@@ -260,6 +266,8 @@ def _repetition_body(task: dict) -> list[Table1Row]:
         kw = {"random_state": task["rep"]}
         if name != "gpr":
             kw["n_components"] = task["n_components"]
+        else:
+            kw["prior_mean"] = task["gpr_prior_mean"]
         model = make_model(name, **kw).fit(S[idx], Y[idx])
         pred = model.predict(S[test])
         rmse_a = float(np.sqrt(np.mean((pred[:, 0] - Y[test, 0]) ** 2)))
@@ -301,7 +309,7 @@ def _check_protocol(name: str) -> None:
 def run_table1(datasets: dict[str, tuple[Field, HittingDataset]], repetitions: int = 100,
                seed: int = 0, executor=None, progress: bool = False, protocol: str = "paper",
                sinking: dict[str, SinkingSet] | None = None, noise_spread: float = 1.0,
-               centre_fraction: float = CENTRE_FRACTION
+               centre_fraction: float = CENTRE_FRACTION, gpr_prior_mean: str | None = None
                ) -> tuple[list[Table1Row], list[Table1Row]]:
     """Run a protocol (module docstring).
 
@@ -330,6 +338,10 @@ def run_table1(datasets: dict[str, tuple[Field, HittingDataset]], repetitions: i
     centre_fraction : float, default :data:`CENTRE_FRACTION`
         ``"paper"``: the width of the centred range the random training points of a
         one-dimensional situation space come from (a fraction of the input range).
+    gpr_prior_mean : {"zero", "data"}, optional
+        GPR's prior mean (:class:`~seds_casadi.minigolf.parameters.GPRModel`); default:
+        :data:`GPR_PRIOR_MEAN` of the protocol (``"paper"``: zero, Eq. 17a as printed;
+        ``"grid"``: the training outputs' mean, as before issue 33).
 
     Returns
     -------
@@ -345,6 +357,10 @@ def run_table1(datasets: dict[str, tuple[Field, HittingDataset]], repetitions: i
         raise ValueError(f"noise_spread must be in [0, 1], got {noise_spread}")
     if not (np.isfinite(centre_fraction) and 0 < centre_fraction <= 1):
         raise ValueError(f"centre_fraction must be in (0, 1], got {centre_fraction}")
+    prior_mean = GPR_PRIOR_MEAN[protocol] if gpr_prior_mean is None else gpr_prior_mean
+    if prior_mean not in GPR_PRIOR_MEANS:
+        raise ValueError(f"gpr_prior_mean must be one of {', '.join(GPR_PRIOR_MEANS)}, got "
+                         f"{prior_mean!r}")
     sinking = dict(sinking or {})
     tasks = []
     for fname, (field, ds) in datasets.items():
@@ -375,6 +391,7 @@ def run_table1(datasets: dict[str, tuple[Field, HittingDataset]], repetitions: i
                               "n_components": N_COMPONENTS[n_out], "sinking": noise,
                               "noise_spread": float(noise_spread),
                               "centre_fraction": float(centre_fraction),
+                              "gpr_prior_mean": prior_mean,
                               "seed": [int(seed), zlib.crc32(fname.encode()), ti, rep]})
     results = (executor.map(_repetition, tasks) if executor is not None
                else map(_repetition, tasks))
