@@ -387,6 +387,10 @@ class GramKernels:
         """J for IPOPT: an SX Function, so CasADi supplies its exact derivatives."""
         return self._f
 
+    def nlp_expression(self) -> tuple[ca.SX, ca.SX]:
+        """(theta, J) as SX: the NLP IPOPT is given when the fit has no constraints."""
+        return self._theta, self._J
+
 
 def simd_enabled() -> bool:
     """Whether the sums over samples may use the vectorised C loops

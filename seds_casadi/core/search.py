@@ -31,6 +31,7 @@ import logging
 import time
 import warnings
 
+import casadi as ca
 import numpy as np
 from sklearn.base import BaseEstimator, clone
 from sklearn.model_selection import ParameterGrid
@@ -143,7 +144,8 @@ def held_out_scores(model, demos: Demonstrations, dt: float | None = None,
     if substeps is None:
         substeps = _auto_substeps(model, float(dt))
     starts = np.stack([p[min(int(start_index), len(p) - 1)] for p in pos])
-    dtw, paths = reproduction_dtw(predict, starts, pos, return_paths=True, dt=float(dt),
+    dtw, paths = reproduction_dtw(_field(model, predict, X.shape[1]), starts, pos,
+                                  return_paths=True, dt=float(dt),
                                   speed_tol=float(speed_tol), max_steps=max_steps, window=4,
                                   substeps=int(substeps))
     out = {"rmse": velocity_rmse(F, V),
@@ -373,6 +375,21 @@ class DemoSearchCV(BaseEstimator):
                          f"{res['mean_dtw'][c]:>9.4g} {res['mean_fit_time'][c]:>6.1f}  "
                          f"{res['params'][c]}{note}")
         return "\n".join(lines)
+
+
+def _field(model, predict, d: int):
+    """The model's CasADi Function x (d,) -> f(x) (d,), the expression its ``predict``
+    evaluates (a :class:`StableDS`, or a fitted SEDS's), which
+    :func:`~seds_casadi.core.metrics.simulate_until_slow` integrates many steps per call; else
+    ``predict`` itself."""
+    inner = getattr(model, "model_", model)
+    get = getattr(inner, "_function", None)
+    if callable(get) and getattr(inner, "predict", None) is not None:
+        f = get()
+        if (isinstance(f, ca.Function) and f.n_in() == 1 and f.n_out() == 1
+                and f.nnz_in(0) == d and f.nnz_out(0) == d):
+            return f
+    return predict
 
 
 def _auto_substeps(model, dt: float, max_substeps: int = 1000) -> int:
