@@ -207,3 +207,21 @@ def test_protocol_is_a_setting_and_an_option():
     assert p.parse_args(["table1", "--protocol", "grid"]).protocol == "grid"
     with pytest.raises(SystemExit):
         p.parse_args(["table1", "--protocol", "moon"])
+
+
+def test_fig11_names_its_points():
+    """Fig. 11's points are the teacher's shots (grid) or the noisy examples (paper)."""
+    from seds_casadi.app.plotting import plot_joint_gmm, pyplot
+    from seds_casadi.minigolf.parameters import make_model
+
+    rng = np.random.default_rng(0)
+    S = np.column_stack([rng.uniform(1.1, 1.5, 30), rng.uniform(-0.45, 0.45, 30)])
+    Y = np.column_stack([40 * S[:, 1], 1 + 0.2 * S[:, 1]])
+    m = make_model("gmr", n_components=3).fit(S, Y)
+    plt = pyplot()
+    for label in ("teacher's shots", "examples (Eq. 15)"):
+        fig = plt.figure()
+        axs = [fig.add_subplot(1, 4, i + 1) for i in range(4)]
+        plot_joint_gmm(m, Y, ax_row=axs, label=label)
+        assert axs[0].get_lines()[0].get_label() == label
+        plt.close(fig)

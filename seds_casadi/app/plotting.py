@@ -208,7 +208,8 @@ def plot_regression_1d(x, y, train, models: dict, ax_row=None, xlabel="s_y [m]",
     return ax_row
 
 
-def plot_joint_gmm(model, outputs: np.ndarray, ax_row=None, names=("alpha [deg]", "kappa")):
+def plot_joint_gmm(model, outputs: np.ndarray, ax_row=None, names=("alpha [deg]", "kappa"),
+                   label: str = "teacher's shots"):
     """Fig. 11: the joint GMM's two outputs with each Gaussian, and each Gaussian's absolute
     correlation matrix.
 
@@ -218,6 +219,8 @@ def plot_joint_gmm(model, outputs: np.ndarray, ax_row=None, names=("alpha [deg]"
         Fitted with ``separate=False`` on 2-D situations and 2 outputs.
     outputs : array, shape (n, 2)
         The data set's outputs.
+    label : str, default "teacher's shots"
+        The outputs' legend entry.
     """
     plt = pyplot()
     (_, gm), = model.gmms_
@@ -228,7 +231,7 @@ def plot_joint_gmm(model, outputs: np.ndarray, ax_row=None, names=("alpha [deg]"
                                                   for k in range(K)]
     ax = ax_row[0]
     d = model.n_inputs_
-    ax.plot(outputs[:, 0], outputs[:, 1], "k.", ms=4, label="teacher's shots")
+    ax.plot(outputs[:, 0], outputs[:, 1], "k.", ms=4, label=label)
     t = np.linspace(0, 2 * np.pi, 100)
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     for k in range(K):

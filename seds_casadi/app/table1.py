@@ -140,7 +140,8 @@ def fig11(ds: HittingDataset, n_components: int = 3, ax_row=None,
 
     Y = ds.outputs if sinking is None else sinking.draw(np.random.default_rng(seed))
     m = make_model("gmr", n_components=n_components).fit(ds.situations, Y)
-    return plot_joint_gmm(m, Y, ax_row=ax_row)
+    label = "teacher's shots" if sinking is None else "examples (Eq. 15)"
+    return plot_joint_gmm(m, Y, ax_row=ax_row, label=label)
 
 
 def _stroke(cfg: Table1Config):
