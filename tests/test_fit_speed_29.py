@@ -3,8 +3,12 @@
 * the compiled DTW (``metrics._dtw_kernel``) against numpy's anti-diagonal sweep;
 * the reproductions integrated by one CasADi call per chunk of steps
   (``simulate_until_slow`` given a Function) against one Python call per step;
-* the LPV start found by the main solver with P's factor held (``SEDSProblem.start_fixed``)
-  against LPV-DS's gain problem solved apart (``_stable_gains_lpv``): the same problem.
+* the peaks of the reproductions (sub-steps included) and the RK4 sub-steps, against the
+  step loop and a closed form;
+
+and the choice's new parts: the time scale of a candidate that rushes
+(``peak_speed_factor``, ``_time_scaled``), the speed band among near ties, and the choice and
+the fit report measuring the same peaks.
 """
 
 from __future__ import annotations
@@ -19,9 +23,8 @@ from oracles import decaying_spiral_demos
 from seds_casadi import SEDS
 from seds_casadi.codegen.cache import compiler_available
 from seds_casadi.core import metrics
-from seds_casadi.core.gmm import responsibilities
-from seds_casadi.core.parametrization import unpack_numpy
-from seds_casadi.core.problem import _stable_gains_lpv, build_problem
+from seds_casadi.core.model_selection import choose_by_reproduction, peak_speed_factor
+from seds_casadi.core.seds import _time_scaled
 
 
 @settings(max_examples=40, deadline=None, derandomize=True)
@@ -49,18 +52,27 @@ def spiral_model():
     return SEDS(3, random_state=0).fit(decaying_spiral_demos()).model_
 
 
+@pytest.mark.parametrize("method", ["euler", "rk4"])
 @pytest.mark.parametrize("substeps", [1, 3])
 @pytest.mark.parametrize("max_steps", [3000, 7, 130])
-def test_chunked_reproductions_equal_the_step_by_step_loop(spiral_model, substeps, max_steps):
-    """Same points, bit for bit, and the same stop: the slow rule (about 300 steps, over two
+def test_chunked_reproductions_equal_the_step_by_step_loop(spiral_model, substeps, max_steps,
+                                                           method):
+    """Same points and peaks, and the same stop: the slow rule (about 300 steps, over two
     chunks of 128), the step limit inside the first chunk (7) and just past it (130)."""
     demos = decaying_spiral_demos()
     starts = np.stack([p[0] for p in demos.positions])
-    kw = dict(dt=0.01, speed_tol=0.05, max_steps=max_steps, substeps=substeps)
-    loop = metrics.simulate_until_slow(spiral_model.predict, starts, **kw)
-    fast = metrics.simulate_until_slow(spiral_model._function(), starts, **kw)
+    kw = dict(dt=0.01, speed_tol=0.05, max_steps=max_steps, substeps=substeps,
+              method=method, return_peaks=True)
+    loop, peaks = metrics.simulate_until_slow(spiral_model.predict, starts, **kw)
+    fast, fast_peaks = metrics.simulate_until_slow(spiral_model._function(), starts, **kw)
     assert fast.shape == loop.shape
-    np.testing.assert_array_equal(fast, loop)
+    if method == "euler":  # the same operations in the same order
+        np.testing.assert_array_equal(fast, loop)
+    else:  # CasADi's RK4 sums in its own order
+        np.testing.assert_allclose(fast, loop, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(fast_peaks, peaks, rtol=1e-12)
+    recorded = np.linalg.norm(spiral_model.predict(loop.reshape(-1, 2)), axis=1)
+    assert np.all(peaks >= recorded.reshape(loop.shape[:2]).max(axis=0) - 1e-12)
     if max_steps == 3000:
         assert 128 < len(loop) < 2999  # stopped by the slow rule, after a chunk boundary
     else:
@@ -73,34 +85,74 @@ def test_a_function_of_the_wrong_size_is_refused():
         metrics.simulate_until_slow(ca.Function("f", [x], [-x]), np.ones((1, 2)))
 
 
-def test_the_start_found_by_the_main_solver_is_lpv_dss_gain_problem():
-    """With the Gram statistics and P held, the main NLP is LPV-DS's gain problem: its optimum
-    equals the one :func:`_stable_gains_lpv` finds apart from the same start."""
+def test_rk4_sub_steps_follow_the_closed_form():
+    """x' = -a x from 1 with sub-steps of a h = 0.25: RK4 multiplies x by the known factor
+    R = 1 - z + z^2/2 - z^3/6 + z^4/24 (z = a h) each sub-step, Euler by 1 - z; RK4 stays within
+    2e-5 of exp(-a t), Euler is off by about 3 %; the peak speed is a, at the start."""
+    a, dt, n = 10.0, 0.1, 4
+    z = a * dt / n
+
+    def field(x):
+        return -a * x
+
+    for method, factor in (("rk4", 1 - z + z**2 / 2 - z**3 / 6 + z**4 / 24), ("euler", 1 - z)):
+        path, peaks = metrics.simulate_until_slow(field, np.ones((1, 1)), dt=dt, substeps=n,
+                                                  speed_tol=1e-3, method=method,
+                                                  return_peaks=True)
+        k = np.arange(len(path))
+        np.testing.assert_allclose(path[:, 0, 0], factor ** (n * k), rtol=1e-12)
+        err = np.max(np.abs(path[:, 0, 0] - np.exp(-a * dt * k)))
+        assert err < 2e-5 if method == "rk4" else err > 1e-2
+        assert peaks[0] == pytest.approx(a)
+    with pytest.raises(ValueError, match="'euler' or 'rk4'"):
+        metrics.simulate_until_slow(field, np.ones((1, 1)), method="heun")
+
+
+@pytest.mark.parametrize("ratios, want", [
+    ([1.0, 1.1, 0.9], None),                       # in the band
+    ([0.6, 0.7], None),                            # too slow: not sped up
+    ([1.3, 1.5, 1.4], 1 / np.sqrt(1.3 * 1.5)),      # rushing, spread 1.15: centred
+    ([0.85, 1.4], None),                           # spread 1.65: no factor fits the band
+    ([], None), ([1.3, np.nan], None), ([1.3, 0.0], None),
+])
+def test_the_time_scale_of_a_rushing_candidate(ratios, want):
+    got = peak_speed_factor(ratios)
+    if want is None:
+        assert got is None
+    else:
+        assert got == pytest.approx(want)
+        scaled = got * np.asarray(ratios)
+        assert scaled.min() >= 0.8 * 1.025 and scaled.max() <= 1.25 / 1.025
+
+
+def test_a_time_scaled_model_keeps_its_streamlines_and_certificate(spiral_model):
+    slow = _time_scaled(spiral_model, 0.8)
+    X = np.random.default_rng(0).normal(scale=50.0, size=(200, 2))
+    np.testing.assert_allclose(slow.predict(X), 0.8 * spiral_model.predict(X), rtol=1e-9,
+                               atol=1e-12)
+    assert slow.certificate["max_eig_lyapunov"] < 0
+    assert slow.fit_info["time_scale"] == 0.8
+    np.testing.assert_allclose(slow.A, 0.8 * spiral_model.A, rtol=1e-12)
+
+
+def test_near_ties_within_the_speed_band_go_first():
+    scores = {4: (1.0, 1.0, 1.0), 5: (1.02, 1.0, 1.0), 6: (0.99, 1.0, 1.0), 7: (2.0, 1, 1)}
+    ratios = {4: [1.3, 1.0], 5: [1.0, 1.1], 6: [1.0, 1.0], 7: [1.0, 1.0]}
+    K, _ = choose_by_reproduction(scores)
+    assert K == 4  # the smallest near tie
+    K, table = choose_by_reproduction(scores, speed_ratios=ratios)
+    assert K == 5  # 4 rushes (1.3): the smallest near tie within the band
+    # no near tie within the band: the penalised scores decide as before
+    K, _ = choose_by_reproduction({4: (1, 1, 1), 5: (3, 3, 3)},
+                                  speed_ratios={4: [1.3], 5: [1.0]})
+    assert K == 4
+
+
+def test_the_choice_and_the_fit_report_read_the_same_peaks():
     demos = decaying_spiral_demos()
-    prob = build_problem(demos, SEDS(3, random_state=0)._settings(demos).problem)
-    layout = prob.layout
-    assert prob.start_fixed is not None
-    sl = layout.lyapunov_slice
-    np.testing.assert_array_equal(prob.start_fixed, np.arange(sl.start, sl.stop))
-    th, J = prob.kernels.nlp_expression()
-    solver = ca.nlpsol("lpv_in_main", "ipopt", {"x": th, "f": J},
-                       {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes",
-                        "ipopt.tol": 1e-12})
-    lb, ub = prob.lbx.copy(), prob.ubx.copy()
-    lb[prob.start_fixed] = ub[prob.start_fixed] = prob.theta0[prob.start_fixed]
-    J_main = float(solver(x0=prob.theta0, lbx=lb, ubx=ub)["f"])
-
-    p0 = unpack_numpy(prob.theta0, layout, prob.margin)
-    gamma = responsibilities(prob.X, p0["priors"], p0["mu"], p0["Sx"])
-    gains = _stable_gains_lpv(gamma, prob.X, prob.Xd, p0["P"], prob.margin, list(p0["A"]))
-    F = np.einsum("nk,kij,nj->ni", gamma, np.array(gains), prob.X)
-    J_apart = float(np.mean(np.sum((F - prob.Xd) ** 2, axis=1)))
-    assert J_main == pytest.approx(J_apart, rel=1e-5)
-    assert J_main < prob.kernels.value(prob.theta0)  # the start gains were improved on
-
-
-def test_the_default_fit_reports_its_lpv_start():
-    model = SEDS(3, random_state=0).fit(decaying_spiral_demos()).model_
-    assert model.fit_info["start_iterations"] > 0
-    c = model.certificate
-    assert c["max_eig_lyapunov"] < 0 and c["min_eig_cov"] > 0
+    learner = SEDS(n_components=[3, 4], random_state=0).fit(demos)
+    choice = learner.fit_info_["choice"]
+    got = choice["candidates"][choice["n_components"]]["peak_speed_ratios"]
+    rows = learner.report(demos).rows
+    want = [r.peak_speed_reproduction / r.peak_speed_demo for r in rows]
+    np.testing.assert_allclose(got, want, rtol=0.01)

@@ -88,14 +88,25 @@ def test_held_out_scores_of_an_exact_and_a_doubled_model():
     turned = held_out_scores(_linear_model(np.array([[c, -s_], [s_, c]]) @ A), demos)
     assert turned["e_dot"] == pytest.approx(1 - c, abs=0.01)
     assert turned["dtw"] > 5 * exact["dtw"]
-    # the DTW is the LASA evaluation's: Euler from each start at the data's step until slow
+    # the DTW is the LASA evaluation's, from each start at the data's step until slow, with RK4
+    # sub-steps of at most 0.25 / stiffness in between (the fit report's step)
     dt = demos.estimated_dt()
     V_max = np.abs(V).max()
     T = max(len(p) for p in demos.positions)
+    sub = int(np.ceil(dt * np.abs(np.linalg.eigvals(A)).max() / 0.25))
+    assert exact["substeps"] == sub
     ref = reproduction_dtw(_linear_model(A).predict, np.stack([p[0] for p in demos.positions]),
                            demos.positions, dt=dt, speed_tol=1e-3 * V_max,
-                           max_steps=int(np.ceil(3 * T)), window=4)
-    np.testing.assert_allclose(exact["dtw"], ref.mean(), rtol=1e-12)
+                           max_steps=int(np.ceil(3 * T)), window=4, substeps=sub,
+                           method="rk4")
+    np.testing.assert_allclose(exact["dtw"], ref.mean(), rtol=1e-9)
+    # given explicitly, the sub-steps are the protocol's forward Euler
+    literal = reproduction_dtw(_linear_model(A).predict,
+                               np.stack([p[0] for p in demos.positions]), demos.positions,
+                               dt=dt, speed_tol=1e-3 * V_max, max_steps=int(np.ceil(3 * T)),
+                               window=4)
+    np.testing.assert_allclose(held_out_scores(_linear_model(A), demos, substeps=1)["dtw"],
+                               literal.mean(), rtol=1e-12)
     assert exact["steps"] >= 5
 
 
@@ -106,11 +117,11 @@ def test_a_stiff_model_on_coarse_data_is_judged_on_its_motion_not_on_eulers_over
     demos = _linear_demos(A=A, n=3, T=0.5, dt=0.05)
     model = _linear_model(A)
     auto = held_out_scores(model, demos)
-    assert auto["substeps"] == 6  # ceil(0.05 * 60 / 0.5)
+    assert auto["substeps"] == 12  # ceil(0.05 * 60 / 0.25)
     literal = held_out_scores(model, demos, substeps=1)
     assert literal["substeps"] == 1
     assert not np.isfinite(literal["dtw"]) or literal["dtw"] > 1e3
-    # the reproduction at dt / 6 lags the exact flow by a little: a DTW far below the extent
+    # the reproduction at dt / 12 (RK4) follows the exact flow: a DTW far below the extent
     assert auto["dtw"] < 0.5
     assert auto["rmse"] == literal["rmse"] and auto["e_dot"] == literal["e_dot"]
     # a plain callable has no stiffness: the data's step, literally

@@ -20,7 +20,8 @@ import numpy as np
 from ._random import sklearn_random_state
 
 __all__ = ["bic_n_components", "bic_scores", "dsopt_elbow_k", "choose_k_by_bic", "BIC_RULES",
-           "MAX_COMPONENTS", "choose_by_reproduction", "REPRODUCTION_TOLERANCE", "speed_penalty"]
+           "MAX_COMPONENTS", "choose_by_reproduction", "REPRODUCTION_TOLERANCE", "speed_penalty",
+           "peak_speed_factor", "SPEED_BAND"]
 
 #: largest K tried by ``n_components="bic"`` (ds-opt's limit)
 MAX_COMPONENTS = 15
@@ -41,6 +42,45 @@ def speed_penalty(ratios) -> float:
     return float(np.exp(max(0.0, float(np.max(np.abs(np.log(r)))) - np.log(1.25))))
 
 
+#: the band of peak speeds, reproduction over demonstration, the choice aims for
+SPEED_BAND = (0.8, 1.25)
+#: :func:`peak_speed_factor` leaves this factor of room on each side of the band: the choice
+#: measures peaks on forward-Euler reproductions, the fit report on RK4 rollouts, and the two
+#: differ by a few per cent (a 7-D model centred at 0.80-1.25 by Euler read 0.79 in the report)
+SPEED_BAND_ROOM = 1.025
+
+
+def peak_speed_factor(ratios) -> float | None:
+    """The factor c < 1 that brings reproductions which all rush back into :data:`SPEED_BAND`.
+
+    Multiplying a SEDS model's f by c > 0 keeps its streamlines and its certificate and
+    multiplies every reproduction's speed by c, so peak-speed ratios r_n (reproduction over
+    demonstration) become c r_n. When some r_n is above 1.25 and the ratios' spread fits the
+    band with :data:`SPEED_BAND_ROOM` to spare on each side (max r / min r <= 1.25 / 0.8 /
+    1.025^2), c = 1 / sqrt(min r max r) centres them in it (in log scale). A model that is
+    too slow is not sped up (that could break the gain limit), and one whose reproductions
+    disagree more than the band allows cannot be mended by a factor: None in both cases, and
+    when every ratio is already in the band.
+
+    Parameters
+    ----------
+    ratios : array of float
+        Peak-speed ratios, one per demonstration.
+
+    Returns
+    -------
+    float or None
+    """
+    r = np.asarray(ratios, dtype=float)
+    if r.size == 0 or not np.all(np.isfinite(r)) or np.any(r <= 0):
+        return None
+    lo, hi = SPEED_BAND
+    if r.max() <= hi or r.max() / r.min() > hi / lo / SPEED_BAND_ROOM**2:
+        return None
+    c = 1.0 / np.sqrt(r.min() * r.max())
+    return float(c) if c < 1.0 else None
+
+
 def choose_by_reproduction(scores: dict, tolerance: float = REPRODUCTION_TOLERANCE,
                            speed_ratios: dict | None = None) -> tuple[int, dict]:
     """K by how well each candidate model reproduces the demonstrations it was fitted to.
@@ -59,7 +99,10 @@ def choose_by_reproduction(scores: dict, tolerance: float = REPRODUCTION_TOLERAN
     ``speed_ratios`` are given (a model that rushes where the demonstrations did not is worse
     than its path shows; ``SEDS`` gives them). K is the
     smallest candidate with s(K) <= ``tolerance`` * min s: between candidates that reproduce
-    about equally well the simpler model is kept.
+    about equally well the simpler model is kept. With ``speed_ratios``, the near ties that
+    peak within 0.8-1.25x every demonstration's speed go first (a 7-D hitting motion's K = 9
+    peaking at 1.33x was kept, by the tolerance, over a K = 10 within the band that scored
+    better).
 
     The velocity errors alone fall with K; the reproductions do not: a model with too many
     components fits the samples and drifts along the path (its errors compound), one with too
@@ -107,7 +150,12 @@ def choose_by_reproduction(scores: dict, tolerance: float = REPRODUCTION_TOLERAN
     if not valid:
         raise ValueError("no candidate K gave a model whose reproductions could be scored")
     best = min(valid.values())
-    return min(K for K, v in valid.items() if v <= tolerance * best), table
+    near = [K for K, v in valid.items() if v <= tolerance * best]
+    if speed_ratios is not None:  # among near ties, those within the speed band first
+        in_band = [K for K in near
+                   if K in speed_ratios and speed_penalty(speed_ratios[K]) == 1.0]
+        near = in_band or near
+    return min(near), table
 
 
 def bic_n_components(X: np.ndarray, Xdot: np.ndarray, max_components: int = MAX_COMPONENTS,

@@ -68,11 +68,6 @@ class SEDSProblem:
     hessian : Hessian
         The second derivatives IPOPT uses, ``EXACT`` or ``LIMITED_MEMORY``
         (:func:`hessian_strategy`).
-    start_fixed : array of int or None
-        With the Gram statistics and a learned P: the indices of P's factor in theta. The
-        solver first finds the gains of least velocity error with P held at its estimate
-        (LPV-DS's second step, :func:`_stable_gains_lpv`, which the other paths solve apart),
-        then frees P.
     """
 
     layout: Layout
@@ -90,9 +85,6 @@ class SEDSProblem:
     kernels: SumKernels = field(repr=False)
     objective_function: ca.Function = field(repr=False)
     hessian: Hessian = Hessian.EXACT
-    #: indices of theta held at theta0 in a first solve by the same solver (the LPV start of
-    #: the Gram path: the gains of least error with P fixed); None: no such solve
-    start_fixed: np.ndarray | None = field(default=None, repr=False)
 
     @property
     def objective(self) -> Objective:
@@ -441,7 +433,7 @@ def _pack_theta(layout: Layout, P0: np.ndarray, margin: float, weights: np.ndarr
 def _initial_theta(
     layout: Layout, X: np.ndarray, Xd: np.ndarray, margin: float, random_state,
     P0: np.ndarray | None = None, init: Init = Init.JOINT_EM,
-    embedding: PCEmbedding | None = None, lpv_gains: bool = True,
+    embedding: PCEmbedding | None = None,
 ) -> np.ndarray:
     """k-means + EM on the joint (x, xdot) data, then projected onto the stable set.
 
@@ -453,8 +445,7 @@ def _initial_theta(
     velocity error under that mixing, stable for P0 (:func:`_stable_gains_lpv`, started from the
     projected GMR gains of the joint EM's nearest components). ``Init.PC``: the same with the
     GMM of :func:`_pc_gmm`, started from each cluster's weighted least-squares gain, projected
-    (no joint EM). ``lpv_gains=False`` stops before :func:`_stable_gains_lpv` (the caller's
-    solver takes that step) and returns the projected start gains.
+    (no joint EM).
     """
     K, d = layout.K, layout.d
     P0 = np.eye(d) if P0 is None else np.asarray(P0, dtype=float)
@@ -470,7 +461,7 @@ def _initial_theta(
             ridge = START_GAIN_RIDGE * np.trace(XtX) / d
             A = np.linalg.lstsq(XtX + ridge * np.eye(d), Xw.T @ Xd, rcond=None)[0].T
             start.append(_project_stable(A, P0, margin))
-        gains = _stable_gains_lpv(gamma, X, Xd, P0, margin, start) if lpv_gains else start
+        gains = _stable_gains_lpv(gamma, X, Xd, P0, margin, start)
         return _pack_theta(layout, P0, margin, weights, means, covs, gains, X, Xd, gamma)
     joint = np.hstack([X, Xd])
     gm = _em(joint, K, d, random_state)
@@ -486,8 +477,7 @@ def _initial_theta(
     weights, means, covs = gx.weights_, gx.means_, gx.covariances_
     gamma = responsibilities(X, weights, means, covs)
     nearest = [int(np.argmin(np.sum((gm.means_[:, :d] - m) ** 2, axis=1))) for m in means]
-    start = [gmr[j] for j in nearest]
-    gains = _stable_gains_lpv(gamma, X, Xd, P0, margin, start) if lpv_gains else start
+    gains = _stable_gains_lpv(gamma, X, Xd, P0, margin, [gmr[j] for j in nearest])
     return _pack_theta(layout, P0, margin, weights, means, covs, gains, X, Xd, gamma)
 
 
@@ -561,11 +551,8 @@ def build_problem(demos: Demonstrations, settings: ProblemSettings,
     P0 = None
     if settings.learned_lyapunov:
         P0 = estimate_lyapunov(Xs, Xds) if lyapunov0 is None else np.asarray(lyapunov0, float)
-    # with the Gram statistics the problem below is LPV-DS's gain problem itself: its solver
-    # also finds the start gains (SEDSProblem.start_fixed) instead of a second solver built here
-    in_solver = settings.gram_statistics and settings.init in (Init.PC, Init.LPV)
     theta0 = _initial_theta(layout, Xs, Xds, margin, settings.random_state, P0, settings.init,
-                            embedding, lpv_gains=not in_solver)
+                            embedding)
     lbx, ubx = _bounds(layout, settings.gain_limit)
     theta0 = np.clip(theta0, lbx + 1e-9, ubx - 1e-9)
     if settings.fixed_gmm:  # IPOPT takes x_i with lbx_i = ubx_i as a parameter of the problem
@@ -598,16 +585,11 @@ def build_problem(demos: Demonstrations, settings: ProblemSettings,
                              compile=settings.compile, hessian=strategy is Hessian.EXACT,
                              threads=1 if settings.constrained else None,
                              blocked=not settings.constrained)
-    start_fixed = None
-    if in_solver and settings.learned_lyapunov:
-        sl = layout.lyapunov_slice
-        start_fixed = np.arange(sl.start, sl.stop)
     return SEDSProblem(
         layout=layout, settings=settings, X=Xs, Xd=Xds, weights=w,
         position_scale=sx, velocity_scale=sv, target=demos.target.copy(), theta0=theta0,
         lbx=lbx, ubx=ubx, margin=margin, kernels=kernels,
         objective_function=kernels.casadi_function(), hessian=strategy,
-        start_fixed=start_fixed,
     )
 
 

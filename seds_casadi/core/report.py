@@ -28,6 +28,7 @@ import numpy as np
 
 from .demonstrations import Demonstrations
 from .metrics import dtw_distance, pointwise_direction_error, velocity_rmse
+from .search import reproduction_substeps
 
 __all__ = ["DemoReport", "FitReport", "fit_report", "end_offsets", "warn_ends_apart",
            "REACH_FRACTION", "DURATION_FACTOR", "OVERSHOOT", "ENDS_APART", "SPEED_BAND"]
@@ -215,8 +216,7 @@ def fit_report(model, demos: Demonstrations, reach_fraction: float = REACH_FRACT
     pos = [np.asarray(p) + demos.target for p in demos.shifted_positions]
     off, extent = end_offsets(demos)
     tol = reach_fraction * extent
-    rate = float(model.stiffness()) if hasattr(model, "stiffness") else 0.0
-    sub = int(min(1000, max(1, np.ceil(dt * rate / 1.0)))) if np.isfinite(rate) else 1
+    sub = reproduction_substeps(model, dt)  # RK4 at h * stiffness <= 0.25, as the choice of K
     h = dt / sub
     longest = max(len(p) for p in pos) * dt
     steps = int(np.ceil(duration_factor * longest / h)) + 1

@@ -26,7 +26,12 @@ from ._signals import deferred_interrupts
 from .demonstrations import Demonstrations
 from .errors import ConvergenceWarning, SEDSError, SolverError, StabilityError
 from .lyapunov import estimate_lyapunov
-from .model_selection import bic_n_components, choose_by_reproduction
+from .model_selection import (
+    bic_n_components,
+    choose_by_reproduction,
+    peak_speed_factor,
+    speed_penalty,
+)
 from .objectives import approach_constraints
 from .parametrization import Layout, stability_constraints
 from .problem import SEDSProblem, build_problem, data_scales, pc_embedding
@@ -471,19 +476,26 @@ class SEDS(RegressorMixin, BaseEstimator):
                 warnings.simplefilter("always")
                 try:
                     model = self._solve(demos, s_k, embedding=embedding, lyapunov0=lyapunov0)
-                    sc = held_out_scores(model, demos, return_paths=True)
+                    sc = held_out_scores(model, demos)
                 except SEDSError as exc:
                     table[K] = {"error": str(exc), "seconds": time.perf_counter() - t0}
                     metrics[K] = None
                     continue
+            r = _peak_ratios(sc, demo_peaks)
+            c = peak_speed_factor(r) if model.strength is None else None
+            if c is not None:  # it rushes at a common factor: its time scale, slowed (same paths)
+                slowed = _time_scaled(model, c)
+                sc_c = held_out_scores(slowed, demos)
+                r_c = _peak_ratios(sc_c, demo_peaks)
+                if speed_penalty(r_c) < speed_penalty(r):
+                    model, sc, r = slowed, sc_c, r_c
+                else:
+                    c = None
             fitted[K] = (model, caught)
             metrics[K] = (sc["rmse"], sc["e_dot"], sc["dtw"])
-            paths = sc["paths"]  # (T, demos, d), every data step
-            peak = np.linalg.norm(model.predict(paths.reshape(-1, paths.shape[2])), axis=1
-                                  ).reshape(paths.shape[:2]).max(axis=0)
-            ratios[K] = peak / np.maximum(demo_peaks, 1e-300)
+            ratios[K] = r
             table[K] = {"rmse": sc["rmse"], "e_dot": sc["e_dot"], "dtw": sc["dtw"],
-                        "peak_speed_ratios": ratios[K].tolist(),
+                        "peak_speed_ratios": ratios[K].tolist(), "time_scale": c,
                         "seconds": time.perf_counter() - t0}
         if not fitted:
             raise SolverError("no candidate K gave a certified model: "
@@ -501,7 +513,9 @@ class SEDS(RegressorMixin, BaseEstimator):
             "rule": ("the smallest K whose reproductions of the demonstrations score within "
                      "5 % of the best (geometric mean of RMSE, e_dot and DTW, times a penalty "
                      "for peak speeds outside 0.8-1.25x the demonstrations'; "
-                     "model_selection.choose_by_reproduction)"),
+                     "model_selection.choose_by_reproduction); a candidate whose reproductions "
+                     "all peak too fast is first slowed by one factor "
+                     "(model_selection.peak_speed_factor)"),
             "range": list(rng), "at_edge": bool(len(candidates) > 1 and K in rng
                                                 and not (K == rng[0] and rng[0] == 1)),
         }
@@ -658,18 +672,8 @@ class SEDS(RegressorMixin, BaseEstimator):
                 gv = np.asarray(g_fun(theta)).ravel()
                 return float(np.max(np.r_[0.0, bounds["lbg"] - gv, gv - bounds["ubg"]]))
 
-            x0, start_iterations = prob.theta0, 0
-            if prob.start_fixed is not None and not g:
-                # the LPV start (SEDSProblem.start_fixed): the gains of least error with P held
-                # at its estimate, by this solver with P's factor fixed, then P is freed
-                lb1, ub1 = prob.lbx.copy(), prob.ubx.copy()
-                lb1[prob.start_fixed] = ub1[prob.start_fixed] = prob.theta0[prob.start_fixed]
-                res0, stats0 = _run(solver, progress, x0=x0, lbx=lb1, ubx=ub1)
-                start = np.asarray(res0["x"]).ravel()
-                start_iterations = int(stats0.get("iter_count", 0))
-                if np.all(np.isfinite(start)) and np.isfinite(float(res0["f"])):
-                    x0 = start
-            res, stats = _run(solver, progress, x0=x0, lbx=prob.lbx, ubx=prob.ubx, **bounds)
+            res, stats = _run(solver, progress, x0=prob.theta0, lbx=prob.lbx, ubx=prob.ubx,
+                              **bounds)
             status = str(stats.get("return_status", "unknown"))
             theta = np.asarray(res["x"]).ravel()
             J = float(res["f"])
@@ -732,7 +736,6 @@ class SEDS(RegressorMixin, BaseEstimator):
             "constraint_violation": viol,
             "feasibility_pass": recovered,
             "iterations": int(stats.get("iter_count", -1)), "objective": J,
-            "start_iterations": start_iterations,
             "objective_initial": prob.kernels.value(prob.theta0),
             "objective_name": ps.objective.value, "seconds": time.perf_counter() - t0,
             "seconds_solve": time.perf_counter() - t_built, "n_parameters": prob.layout.size,
@@ -811,6 +814,29 @@ def _check_solver_options(settings: SEDSSettings) -> None:
             f"IPOPT refused solver_options {dict(settings.solver_options)!r}: "
             f"{last.split(': ', 1)[-1].strip()} (names and types as in IPOPT's documentation, "
             "e.g. {'mu_strategy': 'adaptive', 'max_cpu_time': 60.0})") from None
+
+
+def _peak_ratios(scores: dict, demo_peaks: np.ndarray) -> np.ndarray:
+    """Each reproduction's peak speed (sub-steps included) over its demonstration's."""
+    return np.asarray(scores["peak_speeds"], dtype=float) / np.maximum(demo_peaks, 1e-300)
+
+
+def _time_scaled(model: StableDS, c: float) -> StableDS:
+    """The model with f multiplied by c > 0 (every A_k and velocity mean scaled): the same
+    streamlines and the same certificate (P A_k + A_k^T P < 0 is unchanged by c > 0), run c
+    times as fast."""
+    d = model.n_dims
+    means, covs = model.means.copy(), model.covariances.copy()
+    means[:, d:] *= c
+    covs[:, d:, :d] *= c
+    covs[:, :d, d:] *= c
+    covs[:, d:, d:] *= c * c
+    info = dict(model.fit_info, time_scale=float(c),
+                speed_factor=float(model.fit_info.get("speed_factor", 1.0)) * c)
+    learned = model.fit_info.get("lyapunov") == "learned"
+    return StableDS(model.priors, means, covs, model.target, info,
+                    str(model.fit_info.get("status", "time-scaled")),
+                    lyapunov=model.lyapunov_matrix if learned else None)
 
 
 def _run(solver, progress: _Progress, **inputs) -> tuple[dict, dict]:
