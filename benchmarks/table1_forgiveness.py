@@ -91,9 +91,10 @@ def slider_windows(teacher: Teacher, ds, n: int = N_POSITIONS, step_deg: float =
 
 def widths_at_gains(teacher: Teacher, ds, gains, every: int = 2, step_deg: float = 0.02,
                     half_span_deg: float = 20.0) -> np.ndarray:
-    """Width [deg] of the successful angle interval holding the teacher's angle (0: none) at
-    every ``every``-th of its situations, at each of ``gains``: shape (len(gains), m). The
-    paper fixes the speed without saying at what; a faster hit narrows the hole's capture."""
+    """Width [deg] of the successful angle interval nearest the teacher's angle (0: none
+    sinks) at every ``every``-th of its situations, at each of ``gains``: shape
+    (len(gains), m). The paper fixes the speed without saying at what; a faster hit narrows
+    the hole's capture."""
     scan = np.deg2rad(np.arange(-half_span_deg, half_span_deg, step_deg))
     centre = int(np.argmin(np.abs(scan)))
     out = []
@@ -101,8 +102,10 @@ def widths_at_gains(teacher: Teacher, ds, gains, every: int = 2, step_deg: float
         row = []
         for i in range(0, len(ds), every):
             runs = true_runs(teacher.map(ds.ball[i], ds.hole[i], ds.alpha[i] + scan, [k])[0])
-            held = [e - s for s, e in runs if s <= centre < e]
-            row.append(step_deg * (held[0] if held else 0))
+            gap = [0 if s <= centre < e else min(abs(s - centre), abs(e - 1 - centre))
+                   for s, e in runs]
+            row.append(step_deg * (np.subtract(*runs[int(np.argmin(gap))][::-1]) if runs
+                                   else 0))
         out.append(row)
     return np.array(out)
 
