@@ -20,8 +20,9 @@ the two agree within a few hundredths). The other factors ask what the protocol 
 that forgive as the paper's did; they are not a reproduction (the ball model is not played).
 
 ``--plane`` runs the rough flat field with its surface replaced by a plane (no bumps, no
-friction variation; the same slider, hole, speed and walls): a field whose angle is a smooth
-function of the situation, to separate the intervals' width from the angle's structure.
+friction variation; the same slider, hole, speed and walls: the field as the paper's simulator
+modelled it, :func:`~seds_casadi.minigolf.table1.simulated_field`): a field whose angle is a
+smooth function of the situation, to separate the intervals' width from the angle's structure.
 
 python benchmarks/table1_forgiveness.py [--repetitions 100] [--factors 1 0.5 0.37 0.25]
                                         [--plane]
@@ -35,7 +36,7 @@ import numpy as np
 from scipy.special import erfinv
 
 from seds_casadi.minigolf import Stroke, collect_dataset
-from seds_casadi.minigolf.fields import Field, load_field
+from seds_casadi.minigolf.fields import load_field
 from seds_casadi.minigolf.parameters import make_model
 from seds_casadi.minigolf.sinking import sinking_set
 from seds_casadi.minigolf.table1 import (
@@ -45,6 +46,7 @@ from seds_casadi.minigolf.table1 import (
     PAPER_TABLE1,
     PAPER_TRAINING_SETS,
     run_table1,
+    simulated_field,
     training_indices,
 )
 from seds_casadi.minigolf.teacher import Teacher, true_runs
@@ -150,9 +152,7 @@ def main():
     for name in fields:
         f = load_field(name)
         if args.plane:
-            spec = dict(f.spec)
-            spec["surface"] = {"shape": "plane", "slope_x": 0.0, "slope_y": 0.0}
-            f = Field.from_dict(spec, source=f"{name} (a plane)")
+            f = simulated_field(f)  # the rough surface's plane
         teacher = Teacher(f, stroke)
         ds = collect_dataset(f, stroke)
         sink = sinking_set(teacher, ds)

@@ -7,8 +7,12 @@ prints, per variant, the success rates beside the paper's, the rows within 0.1 a
 conclusions:
 
 * ``grid``: the protocol before issue 33 (the teacher's shots as they are, random points over
-  the whole range);
-* ``paper``: the default (noise anywhere in the sinking set, centred range 0.6);
+  the whole range, GPR's prior mean the training mean, the field files as they are);
+* ``paper``: the default (noise anywhere in the sinking set, centred range 0.6, zero-mean GPR,
+  the fields as the paper's simulator modelled them: ``simulated_field``);
+* ``rough surface``: ``paper`` on the field files as they are (the rough flat field with its
+  bumps and friction variation);
+* ``GPR mean``: ``paper`` with GPR's prior mean the training outputs' mean;
 * ``noise 0.5`` / ``noise 0``: the examples drawn from the middle half of each sinking
   interval / its middle (no noise);
 * ``centre 0.7`` / ``centre 1``: the random training points from a wider centred range / the
@@ -30,6 +34,7 @@ from seds_casadi.minigolf.table1 import (
     paper_conclusions,
     rows_within,
     run_table1,
+    simulated_field,
 )
 from seds_casadi.minigolf.teacher import Teacher
 from seds_casadi.motion.hitting import HittingMotionLearner
@@ -38,6 +43,8 @@ from seds_casadi.motion.putting_demos import load_hitting_demos
 VARIANTS = {
     "grid": {"protocol": "grid"},
     "paper": {},
+    "rough surface": {},
+    "GPR mean": {"gpr_prior_mean": "data"},
     "noise 0.5": {"noise_spread": 0.5},
     "noise 0": {"noise_spread": 0.0},
     "centre 0.7": {"centre_fraction": 0.7},
@@ -51,17 +58,26 @@ args = ap.parse_args()
 
 stroke = Stroke.from_motion(HittingMotionLearner(n_components=3).fit(load_hitting_demos())
                             .motion_)
-datasets, sinking = {}, {}
+# the field files as they are ("grid", "rough surface") and as the paper's simulator
+# modelled them (every other variant); only a rough surface differs
+data = {"files": ({}, {}), "simulated": ({}, {})}
 for name in TABLE1_FIELDS:
-    f = load_field(name)
-    ds = collect_dataset(f, stroke)
-    datasets[name] = (f, ds)
-    sinking[name] = sinking_set(Teacher(f, stroke), ds)
+    loaded = load_field(name)
+    for kind, f in (("files", loaded), ("simulated", simulated_field(loaded))):
+        if kind == "simulated" and f is loaded:
+            data[kind][0][name], data[kind][1][name] = (data["files"][0][name],
+                                                        data["files"][1][name])
+            continue
+        ds = collect_dataset(f, stroke)
+        data[kind][0][name] = (f, ds)
+        data[kind][1][name] = sinking_set(Teacher(f, stroke), ds)
 
 results = {}
 with open_executor(args.workers) as ex:
     for label, kw in VARIANTS.items():
         t0 = time.perf_counter()
+        datasets, sinking = data["files" if label in ("grid", "rough surface")
+                                 else "simulated"]
         means, _ = run_table1(datasets, args.repetitions, 0, ex, sinking=sinking, **kw)
         results[label] = means
         print(f"{label}: {time.perf_counter() - t0:.0f} s", flush=True)

@@ -225,3 +225,35 @@ def test_fig11_names_its_points():
         plot_joint_gmm(m, Y, ax_row=axs, label=label)
         assert axs[0].get_lines()[0].get_label() == label
         plt.close(fig)
+
+
+def test_the_simulated_rough_flat_field_is_its_plane():
+    """Section 7.2.2: the simulator left out the grass's structure. A rough surface becomes the
+    plane it lies on (the rest of the file kept); other surfaces are the field itself. On the
+    plane the teacher's angle is the straight aim at the hole (a known answer)."""
+    from seds_casadi.app.table1 import _played
+    from seds_casadi.minigolf.table1 import simulated_field
+
+    rough = load_field("rough_flat")
+    flat = simulated_field(rough)
+    assert flat.name == "rough_flat" and flat.spec["surface"]["shape"] == "plane"
+    assert rough.spec["surface"]["shape"] == "rough"  # the loaded field is not changed
+    for key in ("bounds", "hole", "situations", "teacher", "stimp", "ball_region"):
+        assert flat.spec[key] == rough.spec[key]
+    hills = load_field("double_hill")
+    assert simulated_field(hills) is hills
+    teacher = Teacher(flat, STROKE, **COARSE)
+    balls, holes = flat.situations.design(5)
+    ds = teacher.collect(balls, holes)
+    aim = np.rad2deg(STROKE.aim(holes - balls))
+    np.testing.assert_allclose(np.rad2deg(ds.alpha), aim, atol=0.1)
+    # on the rough surface the bumps bend the angle away from the aim somewhere
+    bumpy = Teacher(rough, STROKE, **COARSE).collect(balls, holes)
+    assert np.max(np.abs(np.rad2deg(bumpy.alpha) - aim)) > 0.3
+    # the paper protocol teaches on the simulated fields unless told not to; grid never
+    shapes = [f.spec["surface"]["shape"] for f in _played(Table1Config(), [rough, hills])]
+    assert shapes == ["plane", "hills"]
+    assert _played(Table1Config(simulated_fields=False), [rough])[0] is rough
+    assert _played(Table1Config(protocol="grid"), [rough])[0] is rough
+    with pytest.raises(TypeError, match="simulated_fields"):
+        Table1Config(simulated_fields="yes")

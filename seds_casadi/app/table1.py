@@ -26,6 +26,7 @@ from ..minigolf.table1 import (
     Table1Row,
     format_table1,
     run_table1,
+    simulated_field,
     training_indices,
     write_table1_csv,
 )
@@ -67,6 +68,11 @@ class Table1Config:
         The protocol of :func:`~seds_casadi.minigolf.table1.run_table1`: the paper's (noisy
         examples from the sinking set, random points from the centred range) or the grid
         protocol this package ran before.
+    simulated_fields : bool
+        ``"paper"``: teach and play each field as the paper's simulator modelled it
+        (:func:`~seds_casadi.minigolf.table1.simulated_field`: a rough surface without the
+        grass's structure, Section 7.2.2); False: the field files as they are. ``"grid"``
+        always uses the files as they are.
     """
 
     fields: tuple[str, ...] = TABLE1_FIELDS
@@ -80,6 +86,7 @@ class Table1Config:
     figures: bool = True
     progress: bool = True
     protocol: str = "paper"
+    simulated_fields: bool = True
 
     def __post_init__(self) -> None:
         if self.protocol not in PROTOCOLS:
@@ -90,6 +97,9 @@ class Table1Config:
                            whole_number("repetitions", self.repetitions, 1))
         object.__setattr__(self, "workers", whole_number("workers", self.workers, 1))
         object.__setattr__(self, "seed", whole_number("seed", self.seed, 0))
+        if not isinstance(self.simulated_fields, bool):
+            raise TypeError(f"simulated_fields must be True or False, got "
+                            f"{self.simulated_fields!r}")
 
     def effective(self) -> Table1Config:
         """The settings actually run: ``quick`` caps the repetitions at 3."""
@@ -227,6 +237,22 @@ def _figures(datasets: dict, out: str, sinking: dict | None = None, seed: int = 
         save_figure(fig, os.path.join(out, "fig11_joint_gmm.png"))
 
 
+def _played(cfg: Table1Config, fields: list) -> list:
+    """The fields the protocol teaches and plays on: under ``"paper"`` (with
+    ``simulated_fields``) as the paper's simulator modelled them, else as loaded."""
+    if cfg.protocol != "paper" or not cfg.simulated_fields:
+        return list(fields)
+    out = []
+    for f in fields:
+        g = simulated_field(f)
+        if g is not f:
+            _LOG.info("%s as the paper's simulator modelled it: its %s surface's bumps and "
+                      "friction variation left out (Section 7.2.2), a plane", f.name,
+                      f.spec["surface"]["shape"])
+        out.append(g)
+    return out
+
+
 def table1_command(config: Table1Config | None = None, **overrides) -> list[Table1Row]:
     """``seds-casadi table1``: learn the hitting motion, collect the teacher's data sets, run
     the protocol, log the table beside the paper's and write ``table1.csv``,
@@ -251,7 +277,7 @@ def table1_command(config: Table1Config | None = None, **overrides) -> list[Tabl
     cfg = with_overrides(Table1Config, config, overrides).effective()
     loaded = [load_field(f) for f in cfg.fields]  # bad names fail before any work
     os.makedirs(os.path.join(cfg.out, "datasets"), exist_ok=True)
-    datasets = _teach(cfg, loaded, _stroke(cfg))
+    datasets = _teach(cfg, _played(cfg, loaded), _stroke(cfg))
     sinking = _sinking_sets(datasets, cfg.quick) if cfg.protocol == "paper" else None
     t2 = time.perf_counter()
     with open_executor(cfg.workers, cfg.dask) as ex:

@@ -3,7 +3,9 @@
 Two protocols, chosen by name (:data:`PROTOCOLS`): ``"paper"`` (the default) as Section 7.2.1
 describes it, and ``"grid"``, the protocol of this package before (issues 4 and 15).
 
-``"paper"`` (Section 7.2.1, Fig. 10, Eq. 15-16), for each field and training-set kind:
+``"paper"`` (Section 7.2.1, Fig. 10, Eq. 15-16), for each field and training-set kind, on the
+fields as the paper's simulator modelled them (:func:`simulated_field`: a rough surface without
+the grass's structure, Section 7.2.2; the caller teaches on them):
 
 1. The teacher's data set as in ``"grid"`` (20 situations along one input dimension, the hole
    moved sideways along the far edge with the speed fixed, on rough flat and double hill; 56
@@ -80,7 +82,7 @@ __all__ = ["TRAINING_SETS", "PAPER_TRAINING_SETS", "PROTOCOLS", "CENTRE_FRACTION
            "MODELS_BY_OUTPUTS", "PAPER_TABLE1", "TABLE1_FIELDS", "CSV_COLUMNS",
            "run_table1", "format_table1", "write_table1_csv", "training_indices",
            "Table1Row", "protocol", "training_sets", "centred_indices", "paper_conclusions",
-           "rows_within"]
+           "rows_within", "simulated_field"]
 
 #: The protocols of :func:`run_table1` (module docstring)
 PROTOCOLS = ("paper", "grid")
@@ -167,6 +169,35 @@ class Table1Row:
     success_q10: float = np.nan
     success_q90: float = np.nan
     rmse_angle_std: float = np.nan
+
+
+def simulated_field(field: Field) -> Field:
+    """The field as the paper's simulator modelled it (Section 7.2.2): without the structure of
+    the artificial grass.
+
+    The paper's simulated fields ("Model of these fields", RobotToolKit, Section 7.2) left out
+    "the dimples on the golf ball and the structure of the artificial grass covering the
+    fields", which made its real-robot data sets "more complex" than the simulated ones. A
+    ``"rough"`` surface is that structure (small random bumps and a rolling resistance that
+    varies from place to place about the field's Stimpmeter value), so it becomes the plane it
+    lies on, at the field's Stimpmeter value; every other surface (hills, arctan, planes,
+    height maps), and everything else in the file, is kept.
+
+    Parameters
+    ----------
+    field : Field
+
+    Returns
+    -------
+    Field
+        ``field`` itself when its surface is not ``"rough"``; else the same field (name, hole,
+        walls, situations, teacher) on a plane.
+    """
+    if field.spec["surface"]["shape"] != "rough":
+        return field
+    spec = dict(field.spec)
+    spec["surface"] = {"shape": "plane", "slope_x": 0.0, "slope_y": 0.0}
+    return Field.from_dict(spec, source=f"{field.name} (as simulated: no grass structure)")
 
 
 def centred_indices(situations: np.ndarray, fraction: float = CENTRE_FRACTION) -> np.ndarray:
