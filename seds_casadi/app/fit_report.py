@@ -45,7 +45,7 @@ def plot_fit_report(report, demos, title: str | None = None):
             ax_p.plot(np.arange(len(path)) * dt, path[:, 0], ls, color=c, lw=1.2,
                       label=f"demo {row.demo}")
         ax_v.plot(np.arange(len(v)) * dt, np.linalg.norm(v, axis=1), color="0.6", lw=2.5)
-        ax_v.plot(np.arange(len(sp)) * dt, sp, ls, color=c, lw=1.2,
+        ax_v.plot(np.arange(len(sp)) * (report.speed_dt or dt), sp, ls, color=c, lw=1.2,
                   label=f"{row.demo}: peak x{row.speed_ratio:.2f}")
     if demos.n_dims >= 2:
         ax_p.plot(*demos.target[:2], "k*", ms=10)

@@ -132,9 +132,11 @@ class FitReport:
     reach_tolerance: float = 0.0
     #: the reproductions, each shape (T_n, d), sampled at the data's step
     paths: tuple = field(default=(), repr=False)
-    #: the reproductions' speeds along ``paths``
+    #: the reproductions' speeds at every step of their rollouts (``speed_dt`` apart: the
+    #: peaks the table reports are among them; ``paths`` keep the data's step)
     speeds: tuple = field(default=(), repr=False)
     dt: float = 0.0
+    speed_dt: float = 0.0
 
     @property
     def all_reached(self) -> bool:
@@ -174,6 +176,11 @@ class FitReport:
         if "n_components" in ch and "candidates" in ch:
             lines.append(f"K = {ch['n_components']} chosen among {sorted(ch['candidates'])}: "
                          f"{ch.get('rule', '')}")
+            c = (ch["candidates"].get(ch["n_components"]) or {}).get("time_scale")
+            if c:
+                lines.append(f"its velocities are scaled by {c:.3g}: its reproductions peaked "
+                             f"{1 / c:.3g}x too fast, each by about as much (same paths, same "
+                             "certificate)")
         for name, why in (ch.get("settings") or {}).items():
             if why != "given":
                 lines.append(f"{name}: {why}")
@@ -243,7 +250,7 @@ def fit_report(model, demos: Demonstrations, reach_fraction: float = REACH_FRACT
             dtw=dtw_distance(path, p), end_offset=float(off[n]))
         rows.append(row)
         out_paths.append(path)
-        out_speeds.append(speed_r[::sub])
+        out_speeds.append(speed_r)
         if not reached:
             msgs.append(f"the reproduction of demonstration {n + 1} does not reach the target "
                         f"within {duration_factor:g} x the longest demonstration's duration "
@@ -259,7 +266,7 @@ def fit_report(model, demos: Demonstrations, reach_fraction: float = REACH_FRACT
                     f"({lo}-{hi}): a K outside it may be better; pass n_components="
                     f"range({max(1, lo - 2)}, {hi + 3}) to search wider")
     return FitReport(tuple(rows), tuple(msgs), choice, tol, tuple(out_paths), tuple(out_speeds),
-                     dt)
+                     dt, h)
 
 
 def _plain(v):
