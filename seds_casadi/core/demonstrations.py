@@ -246,7 +246,10 @@ class Demonstrations:
 
     @staticmethod
     def _check_dt(dt) -> float:
-        dt = float(dt)
+        a = np.asarray(dt)
+        if a.shape != () or a.dtype.kind not in "iuf":  # not True (a flag), not "0.1"
+            raise TypeError(f"dt must be a number: a positive finite time step [s], got {dt!r}")
+        dt = float(a)
         if not (np.isfinite(dt) and dt > 0):
             raise ValueError(f"dt must be a positive finite time step, got {dt}")
         return dt

@@ -17,6 +17,9 @@ import numpy as np
 
 from ..codegen import batch_evaluate
 
+#: cap of the squared Mahalanobis distance in the responsibilities (below the largest float)
+MAX_SQUARED_DISTANCE = 1e300
+
 __all__ = ["responsibilities", "responsibilities_sx", "gmr_sx", "gmr_function", "gmr_predict",
            "logsumexp_parts_sx"]
 
@@ -71,7 +74,11 @@ def responsibilities_sx(x, priors, means, covariances) -> list:
     for k in range(len(priors)):
         L = np.linalg.cholesky(covariances[k])
         z = ca.DM(np.linalg.inv(L)) @ (x - ca.DM(means[k]))
-        logp.append(float(np.log(priors[k]) - np.sum(np.log(np.diag(L)))) - 0.5 * ca.sumsqr(z))
+        # the squared Mahalanobis distance capped below inf: beyond ~1e154 standard deviations
+        # from every component it would overflow, every log-density be -inf and log-sum-exp
+        # give NaN (-inf - -inf); capped, the weights stay finite and sum to one
+        q = ca.fmin(ca.sumsqr(z), MAX_SQUARED_DISTANCE)
+        logp.append(float(np.log(priors[k]) - np.sum(np.log(np.diag(L)))) - 0.5 * q)
     _, e, total = logsumexp_parts_sx(logp)
     return [v / total for v in e]
 

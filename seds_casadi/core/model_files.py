@@ -144,7 +144,8 @@ def read_guarded(path: str | os.PathLike, kind: str, versions: tuple[int, ...],
     meta_json = str(data[meta_key])
     try:
         meta = json.loads(meta_json)
-    except (json.JSONDecodeError, RecursionError) as exc:
+    except (ValueError, RecursionError) as exc:  # also an integer of more digits than
+        # Python converts (sys.get_int_max_str_digits)
         raise ModelFileError(f"{path}: entry {meta_key!r} is not valid JSON ({exc})") from None
     if not isinstance(meta, dict):
         raise ModelFileError(f"{path}: entry {meta_key!r} is not a JSON object")

@@ -35,6 +35,7 @@ import numpy as np
 
 from ..codegen import CachedFunctionMixin, batch_evaluate
 from ._io import read_npz
+from .demonstrations import MAX_MAGNITUDE
 from .errors import ConvergenceWarning, ModelFileError, StabilityError
 from .gmm import responsibilities_sx
 from .model_files import MAX_VALUES, RESERVED_BYTES, read_guarded, write_guarded
@@ -54,6 +55,10 @@ _SCHEMAS = {VERSION: _SCHEMA, VERSION_LYAPUNOV: _SCHEMA_LYAPUNOV,
             VERSION_STRENGTH_LYAPUNOV: {**_SCHEMA_LYAPUNOV, **_STRENGTH_ENTRIES}}
 #: beyond this many times the data's extent, Eq. 6 is evaluated at that distance (velocity_sx)
 FAR_FACTOR = 1e6
+#: most components (of the DS, and of its strength factor) and dimensions a model file may
+#: declare: checked before the model is built (200,000 components took minutes to load)
+MAX_FILE_COMPONENTS = 1000
+MAX_FILE_DIMS = 100
 #: below this ||f|| (only at x* in practice) a strength model's velocity is 0
 _TINY = 1e-200
 #: largest stable step of explicit Euler and RK4 for a rate lambda: dt * lambda below these
@@ -66,6 +71,14 @@ def _distances(E: np.ndarray) -> np.ndarray:
     scale = np.where(scale > 0, scale, 1.0)
     with np.errstate(over="ignore"):  # inf only beyond the largest float
         return scale[:, 0] * np.linalg.norm(E / scale, axis=1)
+
+
+def _real(value, name: str) -> float:
+    """``value`` as a float if it is a real number (not a boolean, a string or an array)."""
+    a = np.asarray(value)
+    if a.shape != () or a.dtype.kind not in "iuf":
+        raise TypeError(f"{name} must be a number, got {value!r}")
+    return float(a)
 
 
 def _finite(X: np.ndarray, starts: np.ndarray, step: int) -> np.ndarray:
@@ -127,6 +140,18 @@ def certify(
     if not (np.all(np.isfinite(priors)) and np.all(np.isfinite(means))
             and np.all(np.isfinite(covariances)) and np.all(np.isfinite(target))):
         raise StabilityError("the model has non-finite parameters", "finite parameters", status)
+    # the bound on demonstrations (positions and velocities within MAX_MAGNITUDE): a model of
+    # such data has its means and target within it and its covariances within its square;
+    # beyond, its distances overflow (a model file's means at 1e300 predicted NaN everywhere)
+    big = max(float(np.max(np.abs(means), initial=0.0)), float(np.max(np.abs(target),
+                                                                       initial=0.0)))
+    if big > MAX_MAGNITUDE or float(np.max(np.abs(covariances), initial=0.0)) > \
+            MAX_MAGNITUDE ** 2:
+        raise StabilityError(
+            f"the model's means or target reach {big:.3g} or its covariances "
+            f"{float(np.max(np.abs(covariances), initial=0.0)):.3g}: beyond the "
+            f"{MAX_MAGNITUDE:.0e} (and its square) of any positions and velocities",
+            "finite parameters", status)
     # (d), (e)
     if np.any(priors <= 0) or np.any(priors > 1 + 1e-12):
         raise StabilityError(f"priors {priors} outside (0, 1]", "(d) 0 < pi_k <= 1", status)
@@ -324,8 +349,16 @@ class StableDS(CachedFunctionMixin):
         info : dict, only with ``return_info``
         """
         X, single = as_points(x0, self.n_dims, "x0")
+        dt = _real(dt, "dt")
         if not (np.isfinite(dt) and dt > 0):
             raise ValueError(f"dt must be positive, got {dt}")
+        if tol is not None and not (np.isfinite(tol := _real(tol, "tol")) and tol >= 0):
+            raise ValueError(f"tol must be a finite distance >= 0 (or None: 1e-3 times the "
+                             f"largest start distance), got {tol}; a trajectory stops once "
+                             "||x - x*|| < tol")
+        steps = np.asarray(max_steps)
+        if steps.shape != () or steps.dtype.kind not in "iu" or steps < 0:
+            raise ValueError(f"max_steps must be a whole number >= 0, got {max_steps!r}")
         if method not in ("rk4", "euler"):
             raise ValueError(f"unknown method {method!r}; valid: rk4, euler")
         rate = self.stiffness() if warn else 0.0
@@ -416,13 +449,18 @@ class StableDS(CachedFunctionMixin):
         # (NaN from inf - inf at 1e200) while the weights there already depend only on the
         # direction; the expression is unchanged within that distance
         R = self._far_radius()
-        s = R / ca.fmax(ca.mmax(ca.fabs(e)), R)  # max-norm: no overflow, no 0/0 at x*
+        far = ca.mmax(ca.fabs(e))
+        s = R / ca.fmax(far, R)  # max-norm: no overflow, no 0/0 at x*
         h = responsibilities_sx(ca.DM(self.target) + s * e, self.priors, self.means[:, :d],
                                 self.covariances[:, :d, :d])
+        # the gains act on e / c (entries within 1) and the sum is scaled back by c: where
+        # f(x) is beyond the largest float it is +-inf, not NaN (A_k e summed +inf and -inf
+        # terms from about 1e308); c = 1 within distance 1 of x*, where nothing changes
+        c = ca.fmax(far, 1.0)
         f = ca.SX.zeros(d, 1)
         for k in range(self.n_components):
-            f = f + h[k] * (ca.DM(self.A[k]) @ e)
-        return f
+            f = f + h[k] * (ca.DM(self.A[k]) @ (e / c))
+        return c * f
 
     def _far_radius(self) -> float:
         """FAR_FACTOR times the data's extent: the largest distance of a component's mean
@@ -498,6 +536,17 @@ class StableDS(CachedFunctionMixin):
         schema = _SCHEMAS.get(version, _SCHEMA)
         arrays, info, _ = read_guarded(path, FORMAT, tuple(_SCHEMAS), schema,
                                        meta_key="fit_info")
+        sizes = {name: len(arrays[name]) for name in ("priors", "strength_priors", "target")
+                 if name in arrays and arrays[name].ndim >= 1}
+        limits = {"priors": MAX_FILE_COMPONENTS, "strength_priors": MAX_FILE_COMPONENTS,
+                  "target": MAX_FILE_DIMS}
+        for name, n in sizes.items():
+            if n > limits[name]:
+                raise ModelFileError(
+                    f"{os.fspath(path)}: entry {name!r} declares {n} "
+                    f"{'dimensions' if name == 'target' else 'components'}, more than the "
+                    f"{limits[name]} a model file may hold (checked before the model is "
+                    "built: each component costs about a millisecond)")
         strength = radius = None
         try:
             if "strength_priors" in arrays:

@@ -74,7 +74,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core._io import data_folder, open_regular
+from ..core._io import InputFileError, data_folder, open_regular
 from .field_schema import MAX_FILE_BYTES, TEACHER_KEYS, check_field_spec, did_you_mean, plain_numbers
 from .situations import Situations
 from .surface import Surface
@@ -281,7 +281,10 @@ def load_field(name_or_path: str | os.PathLike) -> Field:
         with open_regular(path, MAX_FILE_BYTES, "field file", text=True,
                           encoding="utf-8-sig") as fh:
             spec = json.load(fh)
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+    except InputFileError:  # not a regular file, too large: the message names it
+        raise
+    except ValueError as exc:  # JSONDecodeError, UnicodeDecodeError, an integer of more
+        # digits than Python converts (sys.get_int_max_str_digits)
         raise ValueError(f"{path}: not valid JSON ({exc})") from None
     except RecursionError:
         raise ValueError(f"{path}: nested too deeply to be a field file") from None
