@@ -203,7 +203,7 @@ def _add_lasa(sub, quiet) -> None:
                     help="number of Gaussians; for ds-opt also 'bic' (ds-opt's choice by BIC on "
                          "[x; xdot], up to --k-max) or 'published' (the K of the published run "
                          "per shape) [5; ds-opt: bic]")
-    la.add_argument("--k-max", type=int, default=15, help="largest K of -K bic [15]")
+    la.add_argument("--k-max", type=_at_least(1), default=15, help="largest K of -K bic [15]")
     la.add_argument("--samples", type=_at_least(2), default=100,
                     help="samples kept per demonstration, at least 2 (1000 or more: all of "
                          "LASA's 1000) [100; ds-opt: every 2nd of 1000]")
@@ -503,40 +503,47 @@ def main(argv: list[str] | None = None) -> int:
     SIGTERM) stops the workers, removes temporary files and returns 130; ``--debug`` (anywhere
     on the line) shows the traceback instead.
     """
+    program = argv is None  # the process's own command line: it ends when main returns
     argv = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in argv
     argv = [x for x in argv if x != "--debug"]
-    parser = build_parser()
-    parser.add_argument("--debug", action="store_true",
-                        help="show the full traceback of an error instead of one line")
-    a = parser.parse_args(argv)
-    if a.command is None:
-        parser.print_help()
-        return 2
-    if a.command not in _COMMANDS:
-        parser.error(f"unknown command {a.command}")
-    from ..core._signals import interrupt_on_termination, restore_handlers
+    from ..core._signals import ignore_until_exit, interrupt_on_termination, restore_handlers
     from ..core.errors import ConvergenceWarning, SEDSError
     from .outdir import output_folder
 
-    warnings.simplefilter("always", ConvergenceWarning)
-    previous = interrupt_on_termination()  # SIGTERM, SIGHUP: as Ctrl-C
+    # first: building the parser imports the robots' layer (a second on one core), and an
+    # interrupt there ends the command like one later
+    previous = interrupt_on_termination()  # SIGTERM, SIGHUP: as Ctrl-C; the first one counts
+    command = next((x for x in argv if x in _COMMANDS), "")
+    interrupted = False
     try:
+        parser = build_parser()
+        parser.add_argument("--debug", action="store_true",
+                            help="show the full traceback of an error instead of one line")
+        a = parser.parse_args(argv)
+        if a.command is None:
+            parser.print_help()
+            return 2
+        if a.command not in _COMMANDS:
+            parser.error(f"unknown command {a.command}")
+        command = a.command
+        warnings.simplefilter("always", ConvergenceWarning)
         with output_folder(a.out), command_logging(
                 quiet=getattr(a, "quiet", False),
                 names=_COMMAND_LOGGERS.get(a.command, _DEFAULT_LOGGERS)):
             return _COMMANDS[a.command](a)
     except KeyboardInterrupt:
+        interrupted = True
         if debug:
             raise
-        print(f"seds-casadi {a.command}: interrupted; the files written so far are complete, "
-              f"the rest was not written", file=sys.stderr)
+        print(f"seds-casadi{' ' + command if command else ''}: interrupted; the files written "
+              "so far are complete, the rest was not written", file=sys.stderr)
         return 130
     except RuntimeError as exc:  # CasADi's errors (a setting it refused, a failed call)
         if debug or not ("casadi" in str(exc).lower() or "ipopt" in str(exc).lower()):
             raise
         lines = [ln for ln in str(exc).splitlines() if ln.strip()]
-        print(f"seds-casadi {a.command}: error: CasADi/IPOPT failed: "
+        print(f"seds-casadi {command}: error: CasADi/IPOPT failed: "
               f"{lines[-1].split(': ', 1)[-1].strip() if lines else type(exc).__name__} "
               "(--debug shows the traceback)", file=sys.stderr)
         return 2
@@ -546,10 +553,13 @@ def main(argv: list[str] | None = None) -> int:
         text = str(exc) or type(exc).__name__
         if isinstance(exc, OSError) and exc.filename and str(exc.filename) not in text:
             text = f"{exc.filename}: {text}"
-        print(f"seds-casadi {a.command}: error: {text}", file=sys.stderr)
+        print(f"seds-casadi {command}: error: {text}", file=sys.stderr)
         return 2
     finally:
-        restore_handlers(previous)
+        if interrupted and program:  # the process ends: a SIGTERM after Ctrl-C killed it
+            ignore_until_exit()      # while the interpreter shut down (default handlers)
+        else:
+            restore_handlers(previous)
 
 
 if __name__ == "__main__":  # pragma: no cover

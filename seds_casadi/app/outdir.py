@@ -18,6 +18,7 @@ import contextlib
 import errno
 import fcntl
 import os
+import re
 from collections.abc import Iterator
 
 from ..core._io import is_plain_name
@@ -72,12 +73,18 @@ def path_under(out: str | os.PathLike, *parts: str) -> str:
     return path
 
 
+#: the temporary name a figure was written under before issue 30 (``NAME.tmp-PID.EXT``, now
+#: ``.tmp-PID-NAME``): a run of an older version killed while saving left it; swept too
+_OLD_FIGURE_TEMP = re.compile(r".+\.tmp-\d+\.(png|pdf|svg|gif|jpg)")
+
+
 def sweep_temporary_files(path: str) -> list[str]:
-    """Remove ``.tmp-*`` files under ``path`` (left by a killed run); returns their paths."""
+    """Remove ``.tmp-*`` files under ``path`` (left by a killed run), and figures' temporary
+    files of the older naming ``NAME.tmp-PID.EXT``; returns their paths."""
     removed = []
     for root, _, files in os.walk(path):
         for name in files:
-            if name.startswith(".tmp-"):
+            if name.startswith(".tmp-") or _OLD_FIGURE_TEMP.fullmatch(name):
                 p = os.path.join(root, name)
                 with contextlib.suppress(OSError):
                     os.unlink(p)

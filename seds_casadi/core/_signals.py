@@ -24,17 +24,34 @@ TERMINATING = (signal.SIGTERM, *((signal.SIGHUP,) if hasattr(signal, "SIGHUP") e
 SIGNALS = (signal.SIGINT, *TERMINATING)
 
 
+#: set by the first signal :func:`interrupt_on_termination` handles: the command is stopping
+_stopping = False
+
+
 def _raise_interrupt(signum, frame) -> None:
+    """The first signal raises ``KeyboardInterrupt``; the next ones (a second Ctrl-C, a
+    SIGTERM after it) are ignored, so the clean-up the first one started runs to its end
+    (it removes the run lock and temporary files within the 2 s of an interrupt)."""
+    global _stopping
+    if _stopping:
+        return
+    _stopping = True
     raise KeyboardInterrupt
 
 
 def interrupt_on_termination() -> dict:
     """Make each of :data:`TERMINATING` raise ``KeyboardInterrupt`` (so the clean-up of Ctrl-C
-    runs: workers stopped, temporary files and the run lock removed, exit 130); returns the
-    previous handlers for :func:`restore_handlers`. Outside the main thread nothing changes
-    (and an empty dict is returned)."""
+    runs: workers stopped, temporary files and the run lock removed, exit 130), and Ctrl-C
+    too where Python's own handler is in force (an ignored SIGINT stays ignored): the first
+    signal interrupts, later ones do not cut the clean-up short. Returns the previous handlers
+    for :func:`restore_handlers`. Outside the main thread nothing changes (and an empty dict is
+    returned)."""
+    global _stopping
     previous = {}
-    for sig in TERMINATING:
+    _stopping = False
+    for sig in SIGNALS:
+        if sig == signal.SIGINT and signal.getsignal(sig) is not signal.default_int_handler:
+            continue
         try:
             previous[sig] = signal.signal(sig, _raise_interrupt)
         except ValueError:  # not the main thread: leave signals alone
@@ -44,11 +61,25 @@ def interrupt_on_termination() -> dict:
 
 def restore_handlers(previous: dict) -> None:
     """Put back the handlers :func:`interrupt_on_termination` replaced."""
+    global _stopping
     for sig, handler in previous.items():
         try:
             signal.signal(sig, handler)
         except (ValueError, TypeError):  # not the main thread, or a handler set from C
             pass
+    _stopping = False
+
+
+def ignore_until_exit() -> None:
+    """For a process that ends after an interrupt: ignore :data:`SIGNALS` from now on, so that
+    a second Ctrl-C or a SIGTERM neither cuts its clean-up short nor kills it while the
+    interpreter shuts down (Python's finalisation puts the default handlers back in place of
+    its own, but leaves an ignored signal ignored)."""
+    for sig in SIGNALS:
+        try:
+            signal.signal(sig, signal.SIG_IGN)
+        except ValueError:  # not the main thread
+            break
 
 
 class deferred_interrupts:
