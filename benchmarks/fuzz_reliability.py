@@ -1469,9 +1469,10 @@ def run_cli(case: Case, d: str) -> tuple[str, str]:
         finished = _wait(p, case.timeout)
         text = _output(p)
     finally:
-        if holder is not None:
+        if holder is not None:  # the other run: its lock file is its own, not this run's
             holder.kill()
             holder.wait()
+            os.unlink(os.path.join(out, ".seds-casadi.lock"))
     if not finished:
         return "HANG", f"not finished in {case.timeout} s: {text[-1500:]}"
     cls, detail = _classify_exit(p.returncode, text, case.expect, out, case.outputs)
