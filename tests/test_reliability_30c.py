@@ -292,3 +292,38 @@ def test_figures_temporary_files_of_the_older_naming_are_swept(tmp_path):
     with output_folder(out):
         pass
     assert {p.name for p in out.iterdir()} == {n for n, keep in names.items() if keep}
+
+
+def test_an_interrupt_inside_casadis_conversions_is_an_interrupt():
+    """Ctrl-C while CasADi's SWIG code turns a DM into an array came out as ``SystemError:
+    <function DM.__array__ ...> returned a result with an exception set`` (a traceback of
+    ``table1`` interrupted while the hitting motion was probed): batch_evaluate raises the
+    KeyboardInterrupt itself. The interrupt is raised where a signal's handler would raise it,
+    at the first line of CasADi's conversion (a trace function: deterministic), in a
+    subprocess."""
+    import subprocess
+    import sys
+
+    code = """
+import sys
+import casadi as ca, numpy as np
+from seds_casadi.codegen import batch_evaluate
+x = ca.SX.sym("x", 3)
+f = ca.Function("f", [x], [ca.sin(x) * 2])
+def trace(frame, event, arg):
+    if event == "call" and frame.f_code.co_name == "toarray":
+        raise KeyboardInterrupt
+sys.settrace(trace)
+try:
+    batch_evaluate(f, np.ones((3, 4)))
+    print("no exception")
+except BaseException as exc:
+    print(type(exc).__name__)
+finally:
+    sys.settrace(None)
+"""
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60,
+                       env=dict(os.environ, PYTHONPATH=root))
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert r.stdout.strip() == "KeyboardInterrupt", r.stdout

@@ -507,6 +507,7 @@ def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in argv
     argv = [x for x in argv if x != "--debug"]
+    from ..codegen.functions import interrupt_within
     from ..core._signals import ignore_until_exit, interrupt_on_termination, restore_handlers
     from ..core.errors import ConvergenceWarning, SEDSError
     from .outdir import output_folder
@@ -532,7 +533,10 @@ def main(argv: list[str] | None = None) -> int:
                 quiet=getattr(a, "quiet", False),
                 names=_COMMAND_LOGGERS.get(a.command, _DEFAULT_LOGGERS)):
             return _COMMANDS[a.command](a)
-    except KeyboardInterrupt:
+    except (KeyboardInterrupt, SystemError) as exc:
+        # a SystemError from CasADi's C code (SWIG) that an interrupt raised inside it caused
+        if not isinstance(exc, KeyboardInterrupt) and interrupt_within(exc) is None:
+            raise
         interrupted = True
         if debug:
             raise

@@ -128,8 +128,30 @@ def batch_evaluate(f: ca.Function, *columns: np.ndarray) -> list[np.ndarray]:
     over the columns, in compiled or virtual-machine code: the expression is the one defined in
     CasADi, evaluated without a Python loop.
     """
-    out = f.call([ca.DM(c) if np.ndim(c) else float(c) for c in columns])
-    return [np.asarray(o).T.reshape(-1, f.size1_out(j)) for j, o in enumerate(out)]
+    try:
+        out = f.call([ca.DM(c) if np.ndim(c) else float(c) for c in columns])
+        return [np.asarray(o).T.reshape(-1, f.size1_out(j)) for j, o in enumerate(out)]
+    except Exception as exc:  # noqa: BLE001 - only an interrupt's consequence is replaced
+        # a signal's KeyboardInterrupt raised while CasADi's SWIG code converts a DM (its
+        # __array__) comes out as "SystemError: ... returned a result with an exception set":
+        # the interrupt is raised as itself
+        interrupt = interrupt_within(exc)
+        if interrupt is None:
+            raise
+        raise interrupt from None
+
+
+def interrupt_within(exc: BaseException) -> KeyboardInterrupt | None:
+    """The ``KeyboardInterrupt`` that caused ``exc`` (its ``__cause__`` or ``__context__``
+    chain), if any: C code of CasADi (SWIG) reports an interrupt raised inside it as a
+    ``SystemError``."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return exc
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return None
 
 
 class CachedFunctionMixin:

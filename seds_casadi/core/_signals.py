@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import signal
 import threading
+import time
 
 #: signals that end a command the way Ctrl-C does (:func:`interrupt_on_termination`): a kill, and
 #: the terminal or SSH session closing (SIGHUP, where the platform has it)
@@ -24,31 +25,36 @@ TERMINATING = (signal.SIGTERM, *((signal.SIGHUP,) if hasattr(signal, "SIGHUP") e
 SIGNALS = (signal.SIGINT, *TERMINATING)
 
 
-#: set by the first signal :func:`interrupt_on_termination` handles: the command is stopping
-_stopping = False
+#: seconds after an interrupt during which :func:`interrupt_on_termination`'s handler ignores
+#: further signals: the clean-up's time (a command ends within 2 s of an interrupt)
+GRACE_SECONDS = 2.0
+#: time.monotonic() of the last interrupt the handler raised (None: none yet)
+_stopping: float | None = None
 
 
 def _raise_interrupt(signum, frame) -> None:
-    """The first signal raises ``KeyboardInterrupt``; the next ones (a second Ctrl-C, a
-    SIGTERM after it) are ignored, so the clean-up the first one started runs to its end
-    (it removes the run lock and temporary files within the 2 s of an interrupt)."""
+    """Raise ``KeyboardInterrupt``, unless one was raised less than :data:`GRACE_SECONDS`
+    ago: a second Ctrl-C or a SIGTERM right after the first does not cut short the clean-up
+    the first one started (it removes the run lock and temporary files). Later signals
+    interrupt again (an interrupt that C code swallowed is not the last word)."""
     global _stopping
-    if _stopping:
+    now = time.monotonic()
+    if _stopping is not None and now - _stopping < GRACE_SECONDS:
         return
-    _stopping = True
+    _stopping = now
     raise KeyboardInterrupt
 
 
 def interrupt_on_termination() -> dict:
     """Make each of :data:`TERMINATING` raise ``KeyboardInterrupt`` (so the clean-up of Ctrl-C
     runs: workers stopped, temporary files and the run lock removed, exit 130), and Ctrl-C
-    too where Python's own handler is in force (an ignored SIGINT stays ignored): the first
-    signal interrupts, later ones do not cut the clean-up short. Returns the previous handlers
-    for :func:`restore_handlers`. Outside the main thread nothing changes (and an empty dict is
-    returned)."""
+    too where Python's own handler is in force (an ignored SIGINT stays ignored): a signal
+    within :data:`GRACE_SECONDS` of an interrupt does not cut its clean-up short. Returns the
+    previous handlers for :func:`restore_handlers`. Outside the main thread nothing changes
+    (and an empty dict is returned)."""
     global _stopping
     previous = {}
-    _stopping = False
+    _stopping = None
     for sig in SIGNALS:
         if sig == signal.SIGINT and signal.getsignal(sig) is not signal.default_int_handler:
             continue
@@ -67,7 +73,7 @@ def restore_handlers(previous: dict) -> None:
             signal.signal(sig, handler)
         except (ValueError, TypeError):  # not the main thread, or a handler set from C
             pass
-    _stopping = False
+    _stopping = None
 
 
 def ignore_until_exit() -> None:
