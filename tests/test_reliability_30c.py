@@ -18,6 +18,7 @@ import time
 
 import numpy as np
 import pytest
+from test_reliability_30 import _PRELUDE  # the children's first statement
 
 
 def _plain_model(scale: float = 1.0):
@@ -183,12 +184,6 @@ def test_lasa_refuses_a_largest_k_below_one(tmp_path, capsys):
 
 
 # ------------------------------------------------------------------ signals
-_PRELUDE = (
-    "import signal; signal.signal(signal.SIGINT, signal.default_int_handler); "
-    "signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT}); "
-    "import logging, sys; _h = logging.StreamHandler(sys.stderr); "
-    "_log = logging.getLogger('seds_casadi.core.seds'); _log.addHandler(_h); "
-    "_log.setLevel(logging.INFO); ")
 
 
 def _start(tmp_path, code: str, *args):
