@@ -453,17 +453,13 @@ class SEDS(RegressorMixin, BaseEstimator):
         reproductions of them score best (:func:`choose_by_reproduction`); the spectral
         embedding of ``init="pc"`` is computed once for all."""
         seed = sklearn_random_state(settings.problem.random_state)  # one seed for every K
-        embedding = None
-        if settings.problem.init is Init.PC:
-            X, Xd, _, _ = demos.stacked()
-            sx, sv = data_scales(X, Xd)
-            if sx > 0 and sv > 0:
+        embedding = lyapunov0 = None  # neither depends on K: computed once for all
+        X, Xd, _, _ = demos.stacked()
+        sx, sv = data_scales(X, Xd)
+        if sx > 0 and sv > 0:
+            if settings.problem.init is Init.PC:
                 embedding = pc_embedding(X / sx, Xd / sv, max(candidates), seed)
-        lyapunov0 = None  # P's estimate does not depend on K: once for all
-        if settings.problem.learned_lyapunov:
-            X, Xd, _, _ = demos.stacked()
-            sx, sv = data_scales(X, Xd)
-            if sx > 0 and sv > 0:
+            if settings.problem.learned_lyapunov:
                 lyapunov0 = estimate_lyapunov(X / sx, Xd / sv)
         fitted, metrics, table, ratios = {}, {}, {}, {}
         demo_peaks = np.array([np.linalg.norm(v, axis=1).max() for v in demos.velocities])
