@@ -322,3 +322,48 @@ finally:
                        env=dict(os.environ, PYTHONPATH=root))
     assert r.returncode == 0, r.stderr[-2000:]
     assert r.stdout.strip() == "KeyboardInterrupt", r.stdout
+
+
+@pytest.mark.parametrize("sig", ["SIGINT", "SIGTERM"])
+def test_a_signal_under_a_casadi_call_interrupts_once_the_call_returns(sig):
+    """The command line's handler (``interrupt_on_termination``) given a signal while CasADi's
+    SWIG code builds a DM from a numpy array (``DM_from_array``, where SWIG drops what a failed
+    overload raised: ``lasa`` SIGTERM'd at that moment ran to its end and exited 0, CI of
+    2026-12-03): the DM is built, and the KeyboardInterrupt is raised in our code right after.
+    The signal is sent at the conversion's first line by a trace function (deterministic), in
+    a subprocess."""
+    import subprocess
+    import sys
+
+    code = f"""
+import signal, sys, time
+import casadi as ca, numpy as np
+from seds_casadi.core._signals import interrupt_on_termination, restore_handlers
+signal.signal(signal.SIGINT, signal.default_int_handler)
+previous = interrupt_on_termination()
+sent = []
+def trace(frame, event, arg):
+    if event == "call" and frame.f_code.co_name == "DM_from_array" and not sent:
+        sent.append(1)
+        signal.raise_signal(signal.{sig})
+sys.settrace(trace)
+built = None
+try:
+    try:
+        built = ca.DM(np.arange(4.0).reshape(2, 2))
+    finally:
+        sys.settrace(None)
+    time.sleep(2.0)
+    print("no interrupt", flush=True)
+except KeyboardInterrupt:
+    print("KeyboardInterrupt", "built" if built is not None and float(built[1, 1]) == 3.0
+          else "not built", "sent" if sent else "not sent", flush=True)
+except BaseException as exc:
+    print(type(exc).__name__, exc, flush=True)
+restore_handlers(previous)
+"""
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60,
+                       env=dict(os.environ, PYTHONPATH=root))
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert r.stdout.strip() == "KeyboardInterrupt built sent", (r.stdout, r.stderr[-2000:])

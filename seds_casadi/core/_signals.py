@@ -9,12 +9,18 @@ what they raise is kept (:attr:`pending`), the running code asks its solver to s
 iteration callback returns 1), and the exception is raised when the block ends, in Python, where
 it reaches the caller.
 
-:func:`interrupt_on_termination` makes SIGTERM and SIGHUP end a command as Ctrl-C does.
+:func:`interrupt_on_termination` makes SIGTERM and SIGHUP end a command as Ctrl-C does. Its
+handler never raises while Python code runs under a CasADi call (SWIG's conversions, such as
+building a ``DM`` from a numpy array, try one overload after another and drop what the failed
+ones raised): there the signal is delivered again a few milliseconds later, until the
+interrupt can be raised where it reaches the caller (:func:`_raise_interrupt`).
 """
 
 from __future__ import annotations
 
+import os
 import signal
+import sys
 import threading
 import time
 
@@ -30,19 +36,72 @@ SIGNALS = (signal.SIGINT, *TERMINATING)
 GRACE_SECONDS = 2.0
 #: time.monotonic() of the last interrupt the handler raised (None: none yet)
 _stopping: float | None = None
+#: seconds after which a signal that arrived under a CasADi call is delivered again
+REDELIVER_SECONDS = 0.005
+#: whether a signal's second delivery is scheduled (one at a time)
+_redelivering = False
 
 
 def _raise_interrupt(signum, frame) -> None:
     """Raise ``KeyboardInterrupt``, unless one was raised less than :data:`GRACE_SECONDS`
     ago: a second Ctrl-C or a SIGTERM right after the first does not cut short the clean-up
     the first one started (it removes the run lock and temporary files). Later signals
-    interrupt again (an interrupt that C code swallowed is not the last word)."""
+    interrupt again (an interrupt that C code swallowed is not the last word).
+
+    Under a CasADi call (a frame of CasADi's Python module on the stack: SWIG's conversions,
+    our callbacks) outside :class:`deferred_interrupts`, the exception could be dropped by C
+    code (measured: a SIGTERM during ``ca.DM(numpy array)`` left ``lasa`` running to the end,
+    exit 0): the signal is delivered again after :data:`REDELIVER_SECONDS` instead, until it
+    arrives outside CasADi. Inside :class:`deferred_interrupts` it is raised at once (the block
+    keeps it and raises it at its end)."""
     global _stopping
     now = time.monotonic()
     if _stopping is not None and now - _stopping < GRACE_SECONDS:
         return
+    if deferred_interrupts._depth == 0 and _under_casadi(frame):
+        _redeliver(signum)
+        return
     _stopping = now
     raise KeyboardInterrupt
+
+
+def _casadi_dir() -> str | None:
+    """The directory of CasADi's Python package, once it is imported (None before)."""
+    module = sys.modules.get("casadi")
+    path = getattr(module, "__file__", None)
+    return os.path.dirname(os.path.abspath(path)) + os.sep if path else None
+
+
+def _under_casadi(frame) -> bool:
+    """Whether ``frame`` or one of its callers is code of CasADi's Python package."""
+    root = _casadi_dir()
+    while root is not None and frame is not None:
+        if os.path.abspath(frame.f_code.co_filename).startswith(root):
+            return True
+        frame = frame.f_back
+    return False
+
+
+def _redeliver(signum: int) -> None:
+    """Send ``signum`` to the main thread again after :data:`REDELIVER_SECONDS` (once: a
+    signal arriving while a second delivery is scheduled joins it)."""
+    global _redelivering
+    if _redelivering:
+        return
+    _redelivering = True
+    main = threading.main_thread().ident
+
+    def again() -> None:
+        global _redelivering
+        _redelivering = False
+        try:
+            signal.pthread_kill(main, signum)
+        except (ProcessLookupError, OSError):  # the main thread has ended
+            pass
+
+    timer = threading.Timer(REDELIVER_SECONDS, again)
+    timer.daemon = True
+    timer.start()
 
 
 def interrupt_on_termination() -> dict:
