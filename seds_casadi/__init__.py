@@ -4,6 +4,8 @@ Reference implementation of Khansari-Zadeh, Kronander and Billard, "Learning to 
 A Dynamical System-based Approach" (Advanced Robotics, 2012), and of SEDS in Python.
 """
 
+# first: in the console script, Ctrl-C or SIGTERM while the rest is imported exits 130 at once
+from ._startup import STARTUP_HANDLERS  # noqa: F401
 from .core.demo_files import load_demonstrations, save_demonstrations
 from .core.demonstrations import Demonstrations
 from .core.errors import ConvergenceWarning, ModelFileError, SEDSError, SolverError, StabilityError

@@ -367,3 +367,78 @@ restore_handlers(previous)
                        env=dict(os.environ, PYTHONPATH=root))
     assert r.returncode == 0, r.stderr[-2000:]
     assert r.stdout.strip() == "KeyboardInterrupt built sent", (r.stdout, r.stderr[-2000:])
+
+
+def _sigint_as_under_a_shell() -> None:
+    """A child's first act (preexec_fn): Ctrl-C neither ignored nor blocked, as under a
+    terminal's shell (a runner in the background can hand its children SIGINT ignored)."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+
+
+@pytest.mark.parametrize("sig", ["SIGINT", "SIGTERM"])
+def test_an_interrupt_while_the_console_script_imports_the_package_exits_130(tmp_path, sig):
+    """``seds-casadi`` signalled 0.2 s after it starts, while it imports the package (1-2 s,
+    before the command line's own handlers): exit 130 with the command's ``interrupted`` line,
+    no traceback, nothing written. Before: death by SIGTERM (exit -15), a KeyboardInterrupt
+    traceback for Ctrl-C."""
+    import signal
+    import subprocess
+    import sys
+
+    exe = os.path.join(os.path.dirname(sys.executable), "seds-casadi")
+    if not os.path.exists(exe):
+        pytest.skip("the seds-casadi console script is not installed next to this Python")
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    out = tmp_path / "out"
+    proc = subprocess.Popen([exe, "fit", "none.npz", "--out", str(out)], cwd=tmp_path,
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                            start_new_session=True, preexec_fn=_sigint_as_under_a_shell,
+                            env=dict(os.environ, PYTHONPATH=root))
+    try:
+        time.sleep(0.2)
+        assert proc.poll() is None, proc.stdout.read()
+        t = time.perf_counter()
+        os.killpg(proc.pid, getattr(signal, sig))
+        text = proc.stdout.read()
+        proc.wait(10)
+        elapsed = time.perf_counter() - t
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    assert proc.returncode == 130, (proc.returncode, text[-2000:])
+    assert text.strip() == "seds-casadi fit: interrupted; the files written so far are " \
+        "complete, the rest was not written", text
+    assert elapsed < 2.0 and not out.exists()
+
+
+def test_the_start_up_handlers_are_the_console_scripts_alone():
+    """Imported as a library (``python -c``), the package leaves every signal's handler as
+    it was; in the console script the command line takes them over and puts Python's own
+    back when it ends (never the start-up handler, which would exit 130 after a complete
+    run)."""
+    import subprocess
+    import sys
+
+    code = ("import signal, sys; before = {s: signal.getsignal(s) for s in "
+            "(signal.SIGINT, signal.SIGTERM)}; import seds_casadi; "
+            "print(seds_casadi._startup.STARTUP_HANDLERS, all(signal.getsignal(s) is h "
+            "for s, h in before.items()))\n"
+            "sys.argv = ['/x/seds-casadi', 'fit']\n"
+            "from seds_casadi._startup import exit_on_early_signals, _exit_at_once\n"
+            "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
+            "print(exit_on_early_signals(), signal.getsignal(signal.SIGTERM) is _exit_at_once)\n"
+            "from seds_casadi.app.cli import main\n"
+            "main(['fit', 'none.npz'])\n"
+            "print(signal.getsignal(signal.SIGINT) is signal.default_int_handler, "
+            "signal.getsignal(signal.SIGTERM) is signal.SIG_DFL)\n")
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
+                       env=dict(os.environ, PYTHONPATH=root), preexec_fn=_sigint_as_under_a_shell)
+    assert r.returncode == 0, r.stderr[-2000:]
+    lines = r.stdout.strip().splitlines()
+    assert lines[0] == "False True" and lines[1] == "True True", r.stdout
+    assert lines[-1] == "True True", r.stdout

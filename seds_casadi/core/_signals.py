@@ -115,7 +115,9 @@ def interrupt_on_termination() -> dict:
     previous = {}
     _stopping = None
     for sig in SIGNALS:
-        if sig == signal.SIGINT and signal.getsignal(sig) is not signal.default_int_handler:
+        current = signal.getsignal(sig)
+        if sig == signal.SIGINT and not (current is signal.default_int_handler
+                                         or getattr(current, "seds_casadi_startup", False)):
             continue
         try:
             previous[sig] = signal.signal(sig, _raise_interrupt)
@@ -128,6 +130,8 @@ def restore_handlers(previous: dict) -> None:
     """Put back the handlers :func:`interrupt_on_termination` replaced."""
     global _stopping
     for sig, handler in previous.items():
+        if getattr(handler, "seds_casadi_startup", False):  # the import's: Python's own now
+            handler = signal.default_int_handler if sig == signal.SIGINT else signal.SIG_DFL
         try:
             signal.signal(sig, handler)
         except (ValueError, TypeError):  # not the main thread, or a handler set from C
