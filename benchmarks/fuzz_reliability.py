@@ -23,6 +23,10 @@ Run (one core, so that other work is not disturbed)::
 
     taskset -c 1 python benchmarks/fuzz_reliability.py [--only AREA,...] [--match SUBSTRING]
 
+``--sweep N`` adds N signal cases per command at random moments of its run (area
+``signal-sweep``, ``--seed`` for others): ``--only signal-sweep --sweep 20`` is the interrupt
+stress test.
+
 The failing cases' details go to ``/tmp/fuzz_reliability/failures.txt`` (``--report``).
 Python API cases run in a worker process that is restarted after a hang or a crash.
 """
@@ -50,6 +54,8 @@ CLASSES = ("OK", "TRACEBACK", "SILENTLY_WRONG", "HANG", "CRASH", "LEFT_BEHIND",
            "TEMPNAME_IN_MESSAGE")
 TEMPNAME = re.compile(r"\.tmp-[\w.-]*|\btmp[a-z0-9_]{6,}\b")
 WORK = "/tmp/fuzz_reliability"
+#: signal cases per command at random moments, and their seed (``--sweep``, ``--seed``)
+SWEEP, SWEEP_SEED = 0, 0
 
 
 # ====================================================================== cases
@@ -1141,6 +1147,21 @@ def define_cases() -> None:
                           outputs=outs, sig=signal.SIGINT, delay=0.3, setup=sshape_setup,
                           timeout=180))
 
+    # ------------------------------------------------- signals at random moments (--sweep N)
+    # N cases per command, each signal (SIGINT, SIGTERM or SIGHUP) at a moment drawn uniformly
+    # over the command's run (its duration measured on 2 cores, quick settings): start-up,
+    # CasADi's conversions, IPOPT, exudyn, the writing of results. A signal that arrives after
+    # the run ended counts as OK (NOT_REACHED).
+    durations = {"fit": 10.0, "lasa": 4.5, "table1": 9.0, "play": 16.0, "validate": 8.0}
+    rng = np.random.default_rng(SWEEP_SEED)
+    for cmd, (argv, outs, _) in commands.items():
+        for _ in range(SWEEP):
+            sig = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)[int(rng.integers(3))]
+            delay = round(float(rng.uniform(0.05, durations[cmd])), 2)
+            CASES.append(Case("signal-sweep", f"{cmd} {sig.name} at {delay}s (random)",
+                              "signal", argv=argv, outputs=outs, sig=sig, delay=delay,
+                              setup=sshape_setup, timeout=180))
+
     # ---------------------------------------------------------------- concurrency
     K = "concurrency"
     CASES.append(Case(K, "two fits on one --out", "concurrent",
@@ -1728,7 +1749,13 @@ def main() -> int:
     ap.add_argument("--match", help="run only cases whose name contains this")
     ap.add_argument("--report", default=os.path.join(WORK, "failures.txt"))
     ap.add_argument("--list", action="store_true")
+    ap.add_argument("--sweep", type=int, default=0, metavar="N",
+                    help="N more signal cases per command at random moments (area "
+                         "signal-sweep)")
+    ap.add_argument("--seed", type=int, default=0, help="the sweep's random moments")
     args = ap.parse_args()
+    global SWEEP, SWEEP_SEED
+    SWEEP, SWEEP_SEED = args.sweep, args.seed
     if args.worker:
         worker_main()
         return 0
