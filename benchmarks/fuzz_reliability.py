@@ -1539,9 +1539,14 @@ def run_signal(case: Case, d: str) -> tuple[str, str]:
     if TEMPNAME.search(text):
         return "TEMPNAME_IN_MESSAGE", text[-800:]
     if rc == 0:
-        # it may have finished between the poll and the signal
-        return ("OK" if time.perf_counter() - t0 < 0.05 else "SILENTLY_WRONG",
-                f"exit 0 after {signal.Signals(sig).name}: {text[-600:]}")
+        # the signal arrived once the work was done (its results written before it, the
+        # process ending: signals are then ignored), or it was lost (results written after)
+        late = [f for f in case.outputs if not os.path.exists(os.path.join(out, f))
+                or os.path.getmtime(os.path.join(out, f)) >= t_sig]
+        return ("SILENTLY_WRONG" if late else "OK",
+                f"exit 0 after {signal.Signals(sig).name}"
+                + (f", written after it or missing: {late}" if late else
+                   ", every result written before it") + f": {text[-600:]}")
     if rc != 130:
         return "SILENTLY_WRONG", f"exit {rc} (not 130) after the signal: {text[-800:]}"
     if elapsed > 2.0:

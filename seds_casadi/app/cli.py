@@ -516,7 +516,6 @@ def main(argv: list[str] | None = None) -> int:
     # interrupt there ends the command like one later
     previous = interrupt_on_termination()  # SIGTERM, SIGHUP: as Ctrl-C; the first one counts
     command = next((x for x in argv if x in _COMMANDS), "")
-    interrupted = False
     try:
         parser = build_parser()
         parser.add_argument("--debug", action="store_true",
@@ -537,7 +536,6 @@ def main(argv: list[str] | None = None) -> int:
         # a SystemError from CasADi's C code (SWIG) that an interrupt raised inside it caused
         if not isinstance(exc, KeyboardInterrupt) and interrupt_within(exc) is None:
             raise
-        interrupted = True
         if debug:
             raise
         print(f"seds-casadi{' ' + command if command else ''}: interrupted; the files written "
@@ -560,8 +558,10 @@ def main(argv: list[str] | None = None) -> int:
         print(f"seds-casadi {command}: error: {text}", file=sys.stderr)
         return 2
     finally:
-        if interrupted and program:  # the process ends: a SIGTERM after Ctrl-C killed it
-            ignore_until_exit()      # while the interpreter shut down (default handlers)
+        if program:  # the process ends: a signal now (a SIGTERM after Ctrl-C, a Ctrl-C just
+            # as the results were written) would kill it while the interpreter shuts down
+            # (default handlers) or be dropped by a finaliser; its exit code says what it did
+            ignore_until_exit()
         else:
             restore_handlers(previous)
 
