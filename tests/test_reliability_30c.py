@@ -254,12 +254,17 @@ def test_an_interrupt_while_the_command_line_is_built_exits_130(tmp_path, sig):
     instead of exit 130 and one line."""
     import signal
 
-    code = ("import seds_casadi.app.cli as cli; print('main', flush=True); "
+    # the parser takes 0.1-1 s (it lists the robots): here it is held 2 s once it starts,
+    # so that the signal arrives while it is built, whatever the machine's speed
+    code = ("import time; import seds_casadi.app.cli as cli; build = cli.build_parser\n"
+            "def slow():\n"
+            "    print('parser', flush=True); time.sleep(2.0); return build()\n"
+            "cli.build_parser = slow\n"
             "sys.exit(cli.main())")
     proc = _start(tmp_path, code, "fit", "none.npz", "--out", str(tmp_path / "out"))
     try:
-        _read_until(proc, "main")
-        time.sleep(0.1)  # in main (the parser takes 0.4 s or more), not just before it
+        _read_until(proc, "parser")
+        time.sleep(0.1)
         os.killpg(proc.pid, getattr(signal, sig))
         text = proc.stdout.read()
         proc.wait(10)
