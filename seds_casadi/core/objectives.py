@@ -318,6 +318,38 @@ _KERNELS: dict = {}
 _KERNELS_MAX = 16
 
 
+#: the Gram objective's symbols and functions by (layout, margin), built once per process: the
+#: data enter as parameters (G / n, C / n, s / n), so a second fit of the same K and d (the next
+#: K candidate's twin in another data set, a cross-validation, a benchmark) skips the symbolic
+#: construction, and IPOPT's solver built on them is cached too (:func:`gram_solver`)
+_GRAM: dict = {}
+_GRAM_MAX = 32
+
+
+def _gram_symbols(layout: Layout, margin: float) -> dict:
+    """theta, the parameter vector p = [vec(G / n); vec(C / n); s / n], J(theta, p) as SX, and
+    the Functions of J and grad J (theta, p) -> ..., for ``layout`` and ``margin``."""
+    key = (layout.key, float(margin))
+    cached = _GRAM.get(key)
+    if cached is None:
+        Kd, d = layout.K * layout.d, layout.d
+        theta = ca.SX.sym("theta", layout.size)
+        G, C, s = ca.SX.sym("G", Kd, Kd), ca.SX.sym("C", Kd, d), ca.SX.sym("s")
+        M = ca.horzcat(*unpack_casadi(theta, layout, margin)["A"])
+        J = ca.trace(M @ G @ M.T) - 2 * ca.trace(M @ C) + s
+        p = ca.vertcat(ca.vec(G), ca.vec(C), s)
+        cached = _GRAM[key] = {
+            "theta": theta, "p": p, "J": J, "key": key,
+            "f": ca.Function("seds_gram_objective", [theta, p], [J]),
+            "g": ca.Function("seds_gram_gradient", [theta, p], [ca.gradient(J, theta)]),
+            "h": None,  # the Hessian is built when first asked: in 7-D (K d = 28 and more)
+            #             its expression takes seconds to build
+        }
+        while len(_GRAM) > _GRAM_MAX:
+            _GRAM.pop(next(iter(_GRAM)))
+    return cached
+
+
 class GramKernels:
     """The mean squared velocity error with the GMM fixed, through sufficient statistics.
 
@@ -332,6 +364,9 @@ class GramKernels:
     (K d)-square matrix: one evaluation costs O((K d)^2 d) whatever the number of samples, and
     CasADi differentiates it exactly (gradient and Hessian). The by-construction form only
     (A_k from B_k, W_k and P; the constrained form's b_k would need phi_i = [h x_i; h]).
+
+    The statistics are the parameters of one symbolic J per (K, d, form, margin), built once
+    per process (:func:`_gram_symbols`); :attr:`parameters` holds this data's values.
 
     Parameters
     ----------
@@ -354,42 +389,48 @@ class GramKernels:
         d = X.shape[1]
         Phi = (gamma[:, :, None] * X[:, None, :]).reshape(n, K * d)
         G, C, s = Phi.T @ Phi, Phi.T @ Xd, float(np.sum(Xd * Xd))
-        theta = ca.SX.sym("theta", layout.size)
-        M = ca.horzcat(*unpack_casadi(theta, layout, margin)["A"])
-        J = (ca.trace(M @ ca.DM(G) @ M.T) - 2 * ca.trace(M @ ca.DM(C)) + s) / n
-        grad = ca.gradient(J, theta)
-        self._f = ca.Function("seds_gram_objective", [theta], [J])
-        self._g = ca.Function("seds_gram_gradient", [theta], [grad])
-        self._J, self._theta, self._h = J, theta, None  # the Hessian is built when first asked:
-        # in 7-D (K d = 28 and more) its expression takes seconds to build
+        #: p = [vec(G / n); vec(C / n); s / n] (column-major, as CasADi's vec)
+        self.parameters = np.concatenate([(G / n).ravel(order="F"), (C / n).ravel(order="F"),
+                                          [s / n]])
+        self._sym = _gram_symbols(layout, margin)
+        self._f_theta = None
         self.size, self.n_samples, self.norm, self.threads = layout.size, n, float(n), 1
 
     def value(self, theta) -> float:
         """J(theta)."""
-        return float(self._f(theta))
+        return float(self._sym["f"](theta, self.parameters))
 
     def gradient(self, theta) -> np.ndarray:
         """grad J(theta), shape (P,)."""
-        return np.asarray(self._g(theta)).ravel()
+        return np.asarray(self._sym["g"](theta, self.parameters)).ravel()
 
     def hessian(self, theta) -> np.ndarray:
         """Hess J(theta), shape (P, P)."""
-        if self._h is None:
-            self._h = ca.Function("seds_gram_hessian", [self._theta],
-                                  [ca.densify(ca.hessian(self._J, self._theta)[0])])
-        return np.asarray(self._h(theta))
+        sym = self._sym
+        if sym["h"] is None:
+            sym["h"] = ca.Function("seds_gram_hessian", [sym["theta"], sym["p"]],
+                                   [ca.densify(ca.hessian(sym["J"], sym["theta"])[0])])
+        return np.asarray(sym["h"](theta, self.parameters))
 
     def casadi_function(self) -> ca.Function:
         """J as a CasADi Function theta -> J."""
-        return self._f
+        return self.nlp_objective()
 
     def nlp_objective(self) -> ca.Function:
-        """J for IPOPT: an SX Function, so CasADi supplies its exact derivatives."""
-        return self._f
+        """J for IPOPT: an SX Function theta -> J (this data's statistics substituted), so
+        CasADi supplies its exact derivatives."""
+        if self._f_theta is None:
+            sym = self._sym
+            J = ca.substitute(sym["J"], sym["p"], ca.DM(self.parameters))
+            self._f_theta = ca.Function("seds_gram_objective", [sym["theta"]], [J])
+        return self._f_theta
 
-    def nlp_expression(self) -> tuple[ca.SX, ca.SX]:
-        """(theta, J) as SX: the NLP IPOPT is given when the fit has no constraints."""
-        return self._theta, self._J
+    def nlp_parametric(self) -> tuple[ca.SX, ca.SX, ca.SX, tuple]:
+        """(theta, p, J(theta, p), key) as SX: the NLP IPOPT is given when the fit has no
+        constraints, with :attr:`parameters` as its ``p``; ``key`` names the symbols (layout
+        and margin) for a cache of solvers built on them."""
+        sym = self._sym
+        return sym["theta"], sym["p"], sym["J"], sym["key"]
 
 
 def simd_enabled() -> bool:

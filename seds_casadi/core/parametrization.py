@@ -106,6 +106,11 @@ class Layout:
         self.size = self.n_logits + self.K * self.per_component + self.n_lyapunov
 
     @property
+    def key(self) -> tuple:
+        """What determines the layout (K, d, noise, Lyapunov, form): a cache key."""
+        return (self.K, self.d, self.with_noise, self.lyapunov.value, self.formulation.value)
+
+    @property
     def lyapunov_slice(self) -> slice:
         """Where L_P sits in theta (empty for ``lyapunov="identity"``)."""
         return slice(self.size - self.n_lyapunov, self.size)

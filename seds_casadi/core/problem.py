@@ -318,25 +318,23 @@ def _pc_gmm(X: np.ndarray, Xd: np.ndarray, K: int, random_state, reg: float,
     return weights / weights.sum(), means, covs
 
 
-def _stable_gains_lpv(gamma: np.ndarray, X: np.ndarray, Xd: np.ndarray, P0: np.ndarray,
-                      margin: float, A_start: list) -> list:
-    """The A_k of least velocity error with the mixing ``gamma`` (n, K) fixed and
-    A_k^T P0 + P0 A_k <= -2 m I by construction (LPV-DS's second step, Figueroa and
-    Billard 2018, solved here by IPOPT with A_k = P0^-1 (-(B_k B_k^T + m I) + W_k - W_k^T), the
-    learner's form of the stable set).
+#: the LPV start's solvers by (K, d, margin, Hessian): the data (G, C, P0^-1) are parameters,
+#: so each is built once per process (0.01-0.07 s each on 2-D LASA)
+_LPV_SOLVERS: dict = {}
+_LPV_SOLVERS_MAX = 32
 
-    The error sum_i |sum_k gamma_ik A_k x_i - xdot_i|^2 is a quadratic form in [A_1 .. A_K]
-    with the (K d)-square Gram matrix of the features gamma_ik x_i, so the problem's size does
-    not grow with the number of samples.
-    """
-    n, K = gamma.shape
-    d = X.shape[1]
-    Phi = (gamma[:, :, None] * X[:, None, :]).reshape(n, K * d)
-    G, C = Phi.T @ Phi / n, Phi.T @ Xd / n
+
+def _lpv_solver(K: int, d: int, margin: float, limited: bool) -> tuple:
+    """(solver, A(z, p) Function) of :func:`_stable_gains_lpv` for K gains in d dimensions;
+    p = [vec(G); vec(C); vec(P0^-1)]."""
+    key = (K, d, float(margin), limited)
+    cached = _LPV_SOLVERS.pop(key, None)  # taken out while used (threads build their own)
+    if cached is not None:
+        return key, cached
     tril = [(i, j) for i in range(d) for j in range(i + 1)]
     strict = [(i, j) for i in range(d) for j in range(i)]
-    Pinv = np.linalg.inv(P0)
-    z, A_all, z0 = [], [], []
+    G, C, Pinv = ca.SX.sym("G", K * d, K * d), ca.SX.sym("C", K * d, d), ca.SX.sym("Pinv", d, d)
+    z, A_all = [], []
     for k in range(K):
         b = ca.SX.sym(f"b{k}", len(tril))
         w = ca.SX.sym(f"w{k}", len(strict))
@@ -346,21 +344,52 @@ def _stable_gains_lpv(gamma: np.ndarray, X: np.ndarray, Xd: np.ndarray, P0: np.n
         for idx, (i, j) in enumerate(strict):
             W[i, j] = w[idx]
         S = -(B @ B.T + margin * ca.DM.eye(d)) + (W - W.T)
-        A_all.append(ca.DM(Pinv) @ S)
+        A_all.append(Pinv @ S)
         z += [b, w]
-        Lb, skew = _stable_factors(A_start[k], P0, margin)
-        z0 += [Lb[i, j] for i, j in tril] + [skew[i, j] for i, j in strict]
     M = ca.horzcat(*A_all)  # d x K d: F_i = M Phi_i
-    f = ca.trace(M @ ca.DM(G) @ M.T) - 2 * ca.trace(M @ ca.DM(C))
-    nlp = {"x": ca.vertcat(*z), "f": f}
+    f = ca.trace(M @ G @ M.T) - 2 * ca.trace(M @ C)
+    p = ca.vertcat(ca.vec(G), ca.vec(C), ca.vec(Pinv))
+    nlp = {"x": ca.vertcat(*z), "p": p, "f": f}
     opts = {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
             "ipopt.max_iter": 300}
-    if len(z0) > GRAM_EXACT_HESSIAN_MAX_PARAMETERS:  # as the joint problem's Hessian
+    if limited:  # as the joint problem's Hessian
         opts["ipopt.hessian_approximation"] = "limited-memory"
     solver = ca.nlpsol("lpv_gains", "ipopt", nlp, opts)
-    sol = solver(x0=np.array(z0))
-    fA = ca.Function("A", [ca.vertcat(*z)], A_all)
-    out = [np.asarray(a) for a in fA(sol["x"])] if K > 1 else [np.asarray(fA(sol["x"]))]
+    return key, (solver, ca.Function("A", [ca.vertcat(*z), p], A_all))
+
+
+def _stable_gains_lpv(gamma: np.ndarray, X: np.ndarray, Xd: np.ndarray, P0: np.ndarray,
+                      margin: float, A_start: list) -> list:
+    """The A_k of least velocity error with the mixing ``gamma`` (n, K) fixed and
+    A_k^T P0 + P0 A_k <= -2 m I by construction (LPV-DS's second step, Figueroa and
+    Billard 2018, solved here by IPOPT with A_k = P0^-1 (-(B_k B_k^T + m I) + W_k - W_k^T), the
+    learner's form of the stable set).
+
+    The error sum_i |sum_k gamma_ik A_k x_i - xdot_i|^2 is a quadratic form in [A_1 .. A_K]
+    with the (K d)-square Gram matrix of the features gamma_ik x_i, so the problem's size does
+    not grow with the number of samples; the Gram matrix, the cross term and P0^-1 are the
+    parameters of a solver built once per process for each (K, d, margin) (:func:`_lpv_solver`).
+    """
+    n, K = gamma.shape
+    d = X.shape[1]
+    Phi = (gamma[:, :, None] * X[:, None, :]).reshape(n, K * d)
+    G, C = Phi.T @ Phi / n, Phi.T @ Xd / n
+    tril = [(i, j) for i in range(d) for j in range(i + 1)]
+    strict = [(i, j) for i in range(d) for j in range(i)]
+    z0 = []
+    for k in range(K):
+        Lb, skew = _stable_factors(A_start[k], P0, margin)
+        z0 += [Lb[i, j] for i, j in tril] + [skew[i, j] for i, j in strict]
+    limited = len(z0) > GRAM_EXACT_HESSIAN_MAX_PARAMETERS
+    key, (solver, fA) = _lpv_solver(K, d, margin, limited)
+    p = np.concatenate([G.ravel(order="F"), C.ravel(order="F"),
+                        np.linalg.inv(P0).ravel(order="F")])
+    sol = solver(x0=np.array(z0), p=p)
+    _LPV_SOLVERS[key] = (solver, fA)
+    while len(_LPV_SOLVERS) > _LPV_SOLVERS_MAX:
+        _LPV_SOLVERS.pop(next(iter(_LPV_SOLVERS)))
+    A = fA(sol["x"], p)
+    out = [np.asarray(a) for a in A] if K > 1 else [np.asarray(A)]
     if not all(np.all(np.isfinite(a)) for a in out):
         return A_start
     return out

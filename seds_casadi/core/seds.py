@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+import threading
 import time
 import warnings
 
@@ -79,6 +80,11 @@ class _Progress(ca.Callback):
         self.interrupt: deferred_interrupts | None = None
         self.interrupted = False
         self.construct("seds_progress", {})
+
+    def restart(self, label: str) -> None:
+        """Count and time a new solve (a cached solver's callback is used again)."""
+        self.label, self.iteration, self.t0 = label, 0, time.perf_counter()
+        self._last, self.interrupt, self.interrupted = self.t0, None, False
 
     def get_n_in(self):
         return ca.nlpsol_n_out()
@@ -626,16 +632,21 @@ class SEDS(RegressorMixin, BaseEstimator):
         # what they raise into its own errors: Ctrl-C / SIGTERM are held until the block ends
         # (IPOPT stops at its next iteration once one is pending; see _run)
         with deferred_interrupts():
-            objective = prob.kernels.nlp_objective()  # keep alive while the solver runs
             g, lbg, ubg, user = self._constraints(prob, settings, theta_sym)
-            expression = getattr(prob.kernels, "nlp_expression", None)
-            if expression is not None and not g:
-                # J's SX expression itself: CasADi builds its exact Hessian about twice as fast
-                # as through an MX call of the same Function, and IPOPT's evaluations are
-                # cheaper (2-D LASA, K = 10: 0.045 against 0.096 s set-up)
-                theta_sx, J_sx = expression()
-                nlp = {"x": theta_sx, "f": J_sx}
+            parametric = getattr(prob.kernels, "nlp_parametric", None)
+            data, cache_key = {}, None
+            if parametric is not None and not g:
+                # J's SX expression itself, the data's statistics as parameters: CasADi builds
+                # its exact Hessian about twice as fast as through an MX call of the same
+                # Function (2-D LASA, K = 10: 0.045 against 0.096 s set-up), and the solver is
+                # built once per process for each (K, d, margin, options) (_SOLVERS)
+                theta_sx, p_sx, J_sx, sym_key = parametric()
+                nlp = {"x": theta_sx, "p": p_sx, "f": J_sx}
+                data = {"p": prob.kernels.parameters}
+                cache_key = (sym_key, repr(sorted(self._ipopt_options(
+                    settings, prob.hessian).items())))
             else:
+                objective = prob.kernels.nlp_objective()  # keep alive while the solver runs
                 nlp = {"x": theta_sym, "f": objective(theta_sym)}
             bounds = {}
             if g:
@@ -647,11 +658,18 @@ class SEDS(RegressorMixin, BaseEstimator):
                      f"{prob.hessian} Hessian)")
             _LOG.info("%s: solving with IPOPT (problem built in %.1f s)", label,
                       time.perf_counter() - t0)
-            progress = _Progress(prob.layout.size, int(nlp["g"].numel()) if "g" in nlp else 0, label)
+            cached = _take_solver(cache_key)
+            if cached is not None:
+                solver, progress = cached
+                progress.restart(label)
+            else:
+                progress = _Progress(prob.layout.size, int(nlp["g"].numel()) if "g" in nlp
+                                     else 0, label)
             opts = dict(self._ipopt_options(settings, prob.hessian, constrained=bool(g)),
                         iteration_callback=progress)
             try:
-                solver = ca.nlpsol("seds", "ipopt", nlp, opts)
+                if cached is None:
+                    solver = ca.nlpsol("seds", "ipopt", nlp, opts)
             except RuntimeError as exc:
                 if settings.solver_options and "option" in str(exc).lower():  # IPOPT printed the
                     # valid settings of a bad value above
@@ -669,7 +687,8 @@ class SEDS(RegressorMixin, BaseEstimator):
                 return float(np.max(np.r_[0.0, bounds["lbg"] - gv, gv - bounds["ubg"]]))
 
             res, stats = _run(solver, progress, x0=prob.theta0, lbx=prob.lbx, ubx=prob.ubx,
-                              **bounds)
+                              **bounds, **data)
+            _keep_solver(cache_key, (solver, progress))  # after a solve that ended normally
             status = str(stats.get("return_status", "unknown"))
             theta = np.asarray(res["x"]).ravel()
             J = float(res["f"])
@@ -686,7 +705,7 @@ class SEDS(RegressorMixin, BaseEstimator):
                 opts2 = dict(opts, **{"ipopt.hessian_approximation": "limited-memory"})
                 solver2 = ca.nlpsol("seds_feasible", "ipopt", nlp, opts2)
                 res2, stats2 = _run(solver2, progress, x0=prob.theta0, lbx=prob.lbx, ubx=prob.ubx,
-                                    **bounds)
+                                    **bounds, **data)
                 theta2 = np.asarray(res2["x"]).ravel()
                 J2 = float(res2["f"])
                 _LOG.info("%s: the exact-Hessian solve ended %.3g infeasible; with L-BFGS from the "
@@ -833,6 +852,33 @@ def _time_scaled(model: StableDS, c: float) -> StableDS:
     return StableDS(model.priors, means, covs, model.target, info,
                     str(model.fit_info.get("status", "time-scaled")),
                     lyapunov=model.lyapunov_matrix if learned else None)
+
+
+#: IPOPT solvers of fits without constraints whose data enter as parameters (the Gram
+#: objective), with their iteration callbacks, by (symbols, options): built once per process.
+#: A solver is taken out while it solves (another thread builds its own) and put back after a
+#: solve that ended normally.
+_SOLVERS: dict = {}
+_SOLVERS_MAX = 32
+_SOLVERS_LOCK = threading.Lock()
+
+
+def _take_solver(key) -> tuple | None:
+    """The cached (solver, progress) for ``key`` (None: none, or ``key`` is None)."""
+    if key is None:
+        return None
+    with _SOLVERS_LOCK:
+        return _SOLVERS.pop(key, None)
+
+
+def _keep_solver(key, entry: tuple) -> None:
+    """Put (solver, progress) in the cache under ``key`` (nothing if ``key`` is None)."""
+    if key is None:
+        return
+    with _SOLVERS_LOCK:
+        _SOLVERS[key] = entry
+        while len(_SOLVERS) > _SOLVERS_MAX:
+            _SOLVERS.pop(next(iter(_SOLVERS)))
 
 
 def _run(solver, progress: _Progress, **inputs) -> tuple[dict, dict]:

@@ -1,0 +1,82 @@
+"""Issue 29 (SEDS() fast enough to be the default): the Gram fit's IPOPT solver and the LPV
+start's are built once per process for each (K, d, margin, options), with the data's statistics
+as parameters. A cached solver must give exactly the fit a new one gives, on other data."""
+
+import numpy as np
+import pytest
+
+from seds_casadi import SEDS
+from seds_casadi.core import load_lasa
+from seds_casadi.core import objectives as objectives_module
+from seds_casadi.core import problem as problem_module
+from seds_casadi.core import seds as seds_module
+
+
+def _clear() -> None:
+    seds_module._SOLVERS.clear()
+    problem_module._LPV_SOLVERS.clear()
+    objectives_module._GRAM.clear()
+
+
+def _fit(demos, K=4):
+    return SEDS(K, random_state=0).fit(demos).model_
+
+
+@pytest.fixture(scope="module")
+def two_shapes():
+    return load_lasa("Sshape", n_samples=60), load_lasa("Angle", n_samples=60)
+
+
+def test_a_cached_solver_gives_the_fit_a_new_one_gives_on_other_data(two_shapes):
+    a, b = two_shapes
+    _clear()
+    new = _fit(b)
+    assert new.fit_info["sums"] == "gram"  # the default's objective: the cached path ran
+    _clear()
+    _fit(a)
+    solvers = dict(seds_module._SOLVERS)
+    lpv = dict(problem_module._LPV_SOLVERS)
+    assert len(solvers) == 1 and len(lpv) == 1
+    again = _fit(b)  # Angle on the solvers Sshape built
+    assert all(seds_module._SOLVERS[k][0] is v[0] for k, v in solvers.items())  # reused
+    assert all(problem_module._LPV_SOLVERS[k][0] is v[0] for k, v in lpv.items())
+    assert again.fit_info["iterations"] == new.fit_info["iterations"]
+    np.testing.assert_array_equal(again.means, new.means)
+    np.testing.assert_array_equal(again.covariances, new.covariances)
+    np.testing.assert_array_equal(again.priors, new.priors)
+    assert again.fit_info["objective"] == new.fit_info["objective"]
+
+
+def test_the_parametric_gram_objective_is_the_sum_over_samples(two_shapes):
+    """J(theta, p) with this data's statistics as p against the mean squared error summed
+    over the samples in numpy, at random theta."""
+    from seds_casadi.core.parametrization import Layout, unpack_numpy
+
+    demos = two_shapes[0]
+    X, Xd, _, _ = demos.stacked()
+    X, Xd = X / np.abs(X).max(), Xd / np.abs(Xd).max()
+    rng = np.random.default_rng(3)
+    K, d, margin = 3, 2, 1e-3
+    layout = Layout(K, d, False, "learned")
+    gamma = rng.dirichlet(np.ones(K), len(X))
+    kernels = objectives_module.GramKernels(layout, margin, gamma, X, Xd)
+    for _ in range(5):
+        theta = rng.normal(scale=0.5, size=layout.size)
+        A = unpack_numpy(theta, layout, margin)["A"]
+        f = sum(gamma[:, k:k + 1] * (X @ A[k].T) for k in range(K))
+        expected = np.mean(np.sum((f - Xd) ** 2, axis=1))
+        assert kernels.value(theta) == pytest.approx(expected, rel=1e-10)
+        assert float(kernels.nlp_objective()(theta)) == pytest.approx(expected, rel=1e-10)
+
+
+def test_a_solver_in_use_is_not_handed_out_twice():
+    """Taken out while it solves: a second taker (another thread) gets none and builds its
+    own; put back, it is handed out again."""
+    key = ("test", 1)
+    entry = (object(), object())
+    seds_module._keep_solver(key, entry)
+    assert seds_module._take_solver(key) is entry
+    assert seds_module._take_solver(key) is None
+    seds_module._keep_solver(key, entry)
+    assert seds_module._take_solver(key) is entry
+    assert seds_module._take_solver(None) is None
