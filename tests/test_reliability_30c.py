@@ -447,3 +447,44 @@ def test_the_start_up_handlers_are_the_console_scripts_alone():
     lines = r.stdout.strip().splitlines()
     assert lines[0] == "False True" and lines[1] == "True True", r.stdout
     assert lines[-1] == "True True", r.stdout
+
+
+def test_a_result_is_not_put_in_place_while_a_signal_waits_for_its_second_delivery(tmp_path):
+    """A signal under a CasADi call waits a few milliseconds for its second delivery; a result
+    file written in that time (the fuzz campaign: lasa's lasa.csv and summary.txt written
+    just after a Ctrl-C, then exit 130) is not put in place: the interrupt is raised first.
+    The second delivery is held 1 s here, so that the write surely falls in between."""
+    import subprocess
+    import sys
+
+    target = tmp_path / "result.txt"
+    code = f"""
+import signal, sys, time
+import casadi as ca, numpy as np
+import seds_casadi.core._signals as S
+from seds_casadi.core._io import atomic_text
+S.REDELIVER_SECONDS = 1.0
+signal.signal(signal.SIGINT, signal.default_int_handler)
+previous = S.interrupt_on_termination()
+def trace(frame, event, arg):
+    if event == "call" and frame.f_code.co_name == "DM_from_array":
+        sys.settrace(None)
+        signal.raise_signal(signal.SIGTERM)
+sys.settrace(trace)
+try:
+    ca.DM(np.eye(2))
+    sys.settrace(None)
+    atomic_text({str(target)!r}, "complete")
+    print("written", flush=True)
+except KeyboardInterrupt:
+    print("KeyboardInterrupt", flush=True)
+time.sleep(1.5)  # the second delivery falls in the interrupt's grace: no second interrupt
+print("after", flush=True)
+S.restore_handlers(previous)
+"""
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60,
+                       env=dict(os.environ, PYTHONPATH=root))
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert r.stdout.split() == ["KeyboardInterrupt", "after"], (r.stdout, r.stderr[-2000:])
+    assert not target.exists() and not list(tmp_path.iterdir())

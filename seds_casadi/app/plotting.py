@@ -12,6 +12,8 @@ import os
 
 import numpy as np
 
+from ..core._signals import raise_pending_interrupt
+
 __all__ = ["pyplot", "save_figure", "plot_success_map", "plot_regression_1d", "plot_joint_gmm",
            "plot_field", "plot_arm_frames", "plot_strategies", "STRATEGY_COLOURS"]
 
@@ -43,6 +45,7 @@ def save_figure(fig, path: str | os.PathLike, dpi: int = 110) -> None:
     tmp = os.path.join(folder, f".tmp-{os.getpid()}-{name}")
     try:
         fig.savefig(tmp, dpi=dpi, bbox_inches="tight")
+        raise_pending_interrupt()  # a signal's interrupt first: nothing written after it
         os.replace(tmp, path)
     finally:
         if os.path.exists(tmp):

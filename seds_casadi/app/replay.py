@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core._io import atomic_text, data_folder, umask
+from ..core._signals import raise_pending_interrupt
 from ..game.scene import Scene
 from ..game.shot import Shot, play_shot
 from ..motion.golf import BALL_RADIUS
@@ -253,6 +254,7 @@ def write_replay_gif(replay: Replay, field, path: str | os.PathLike, max_frames:
                              f"{replay.row['kappa']:.3f}", fontsize=10)
                 writer.grab_frame()
         os.chmod(tmp, 0o644 & ~umask())
+        raise_pending_interrupt()  # a signal's interrupt first: nothing written after it
         os.replace(tmp, path)
     finally:
         plt.close(fig)

@@ -13,6 +13,8 @@ import tempfile
 from collections.abc import Iterable
 from typing import IO
 
+from ._signals import raise_pending_interrupt
+
 #: a name that may become a file name under an output folder: letters, digits, '.', '_', '-',
 #: not starting with '.' or '-' (no hidden file, no option, no '..'), at most 64 characters
 PLAIN_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9._-]{0,63}")
@@ -52,6 +54,7 @@ def atomic_text(path: str | os.PathLike, text: str) -> None:
     try:
         with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
             fh.write(text)
+        raise_pending_interrupt()  # a signal's interrupt first: nothing written after it
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):
@@ -70,6 +73,7 @@ def atomic_npz(path: str | os.PathLike, **arrays) -> None:
     try:
         with os.fdopen(fd, "wb") as fh:
             np.savez(fh, **arrays)
+        raise_pending_interrupt()  # a signal's interrupt first: nothing written after it
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):

@@ -104,6 +104,17 @@ def _redeliver(signum: int) -> None:
     timer.start()
 
 
+def raise_pending_interrupt() -> None:
+    """Raise now the interrupt of a signal that arrived under a CasADi call and waits for its
+    second delivery (:func:`_redeliver`, a few milliseconds): called before a result file is
+    put in place, so that nothing is written as complete after a signal. The second delivery
+    then falls in the interrupt's grace (:data:`GRACE_SECONDS`)."""
+    global _stopping
+    if _redelivering and threading.current_thread() is threading.main_thread():
+        _stopping = time.monotonic()
+        raise KeyboardInterrupt
+
+
 def interrupt_on_termination() -> dict:
     """Make each of :data:`TERMINATING` raise ``KeyboardInterrupt`` (so the clean-up of Ctrl-C
     runs: workers stopped, temporary files and the run lock removed, exit 130), and Ctrl-C
