@@ -101,7 +101,7 @@ def dtw_distance(s: np.ndarray, t: np.ndarray) -> float:
     kernel = _dtw_kernel() if np.all(np.isfinite(s)) and np.all(np.isfinite(t)) else None
     if kernel is not None:
         s, t = np.ascontiguousarray(s), np.ascontiguousarray(t)
-        rows = np.empty(2 * (len(t) + 1))
+        rows = np.empty(3 * (len(t) + 1))  # two rows of D and one of distances
         ptr = ctypes.POINTER(ctypes.c_double)
         return float(kernel(s.ctypes.data_as(ptr), len(s), t.ctypes.data_as(ptr), len(t),
                             s.shape[1], rows.ctypes.data_as(ptr)))
@@ -129,28 +129,43 @@ def _dtw_numpy(s: np.ndarray, t: np.ndarray) -> float:
 #: the three neighbours), so both give the same number
 _DTW_SOURCE = b"""
 #include <math.h>
+/* each row's point distances first (a loop without dependences, which the compiler
+   vectorises: sqrt is exact, so the distances are the same numbers), then the recurrence */
+static void costs(const double *si, const double *t, long m, long d, double *cost)
+{
+    long j, k;
+    if (d == 2) {
+        for (j = 0; j < m; ++j) {
+            double e0 = si[0] - t[2 * j], e1 = si[1] - t[2 * j + 1];
+            cost[j] = sqrt(e0 * e0 + e1 * e1);
+        }
+        return;
+    }
+    for (j = 0; j < m; ++j) {
+        const double *tj = t + j * d;
+        double acc = 0.0;
+        for (k = 0; k < d; ++k) {
+            double e = si[k] - tj[k];
+            acc += e * e;
+        }
+        cost[j] = sqrt(acc);
+    }
+}
+
 double seds_dtw(const double *s, long n, const double *t, long m, long d, double *rows)
 {
-    double *prev = rows, *cur = rows + (m + 1), *swap;
-    long i, j, k;
+    double *prev = rows, *cur = rows + (m + 1), *cost = rows + 2 * (m + 1), *swap;
+    long i, j;
     prev[0] = 0.0;
     for (j = 1; j <= m; ++j) prev[j] = INFINITY;
     for (i = 1; i <= n; ++i) {
-        const double *si = s + (i - 1) * d;
+        costs(s + (i - 1) * d, t, m, d, cost);
         cur[0] = INFINITY;
         for (j = 1; j <= m; ++j) {
-            const double *tj = t + (j - 1) * d;
-            double acc = 0.0, a, b, c;
-            for (k = 0; k < d; ++k) {
-                double e = si[k] - tj[k];
-                acc += e * e;
-            }
-            a = prev[j];
-            b = cur[j - 1];
-            c = prev[j - 1];
+            double a = prev[j], b = cur[j - 1], c = prev[j - 1];
             a = b < a ? b : a;
             a = c < a ? c : a;
-            cur[j] = sqrt(acc) + a;
+            cur[j] = cost[j - 1] + a;
         }
         swap = prev; prev = cur; cur = swap;
     }
@@ -173,7 +188,9 @@ def _dtw_kernel():
             fn = None
             if compiler_available():
                 try:
-                    fn = load_library(shared_library(_DTW_SOURCE, "dtw", ("-O2",), ("-lm",)))
+                    fn = load_library(shared_library(
+                        _DTW_SOURCE, "dtw", ("-O2", "-ftree-vectorize", "-fno-math-errno"),
+                        ("-lm",)))
                     fn = fn.seds_dtw
                     fn.restype = ctypes.c_double
                     p = ctypes.POINTER(ctypes.c_double)
@@ -343,24 +360,33 @@ def _simulate_function(f: ca.Function, x: np.ndarray, h: float, substeps: int,
         x1, sub = out[:d], out[d]
     n = _CHUNK
     steps = ca.Function("step", [xs], [x1, v, sub]).map(m).mapaccum(n)
-    traj = [x]
-    slow: list[bool] = []
+    traj = [x[None]]
+    slow_count = [0]  # slow_count[j]: how many of steps 0 .. j-1 were slow
     peaks = np.zeros(m)
     cur = ca.DM(x.T)
-    i = 0
+    i = 0  # the index of the chunk's first step
     while True:
         X, V, S = steps(cur)
         Xn = np.asarray(X).T.reshape(n, m, d)
         Vn = np.asarray(V).T.reshape(n, m, d)
         Sn = np.asarray(S).reshape(n, m)
-        slow.extend(np.all(np.abs(Vn) < speed_tol, axis=(1, 2)).tolist())
-        for s in range(n):
-            peaks = np.fmax(peaks, np.linalg.norm(Vn[s], axis=1))
-            if i >= window - 1 and (all(slow[i - window + 1:i + 1]) or i >= max_steps - 2):
-                return np.stack(traj), peaks
-            peaks = np.fmax(peaks, Sn[s])
-            traj.append(Xn[s])
-            i += 1
+        slow = np.all(np.abs(Vn) < speed_tol, axis=(1, 2))
+        slow_count.extend((slow_count[-1] + np.cumsum(slow)).tolist())
+        # the loop's stop rule at each step j = i + s, all at once: the last `window` steps
+        # slow, or the step limit
+        j = i + np.arange(n)
+        counts = np.asarray(slow_count)
+        in_window = counts[j + 1] - counts[np.maximum(j - window + 1, 0)]
+        stop = (j >= window - 1) & ((in_window == window) | (j >= max_steps - 2))
+        first = int(np.argmax(stop)) if stop.any() else n
+        speeds = np.linalg.norm(Vn[:first + 1 if first < n else n], axis=2)
+        peaks = np.fmax(peaks, np.fmax.reduce(speeds, axis=0)) if len(speeds) else peaks
+        if first > 0:
+            peaks = np.fmax(peaks, np.fmax.reduce(Sn[:first], axis=0))
+            traj.append(Xn[:first])
+        if first < n:
+            return np.concatenate(traj), peaks
+        i += n
         cur = ca.DM(Xn[-1].T)
 
 
