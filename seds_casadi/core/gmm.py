@@ -70,17 +70,48 @@ def responsibilities_sx(x, priors, means, covariances) -> list:
         The K weights, summing to one.
     """
     priors, means, covariances = _check_gmm(priors, means, covariances)
+    log_c, inv_chol = _gaussian_constants(priors, covariances)
+    return _weights_sx(x, [float(c) for c in log_c], [ca.DM(m) for m in means],
+                       [ca.DM(w) for w in inv_chol])
+
+
+def _gaussian_constants(priors, covariances) -> tuple[np.ndarray, np.ndarray]:
+    """log pi_k - log det L_k and L_k^-1 (Sigma_k = L_k L_k^T) of each component."""
+    L = np.linalg.cholesky(covariances)
+    log_c = np.log(priors) - np.sum(np.log(np.diagonal(L, axis1=1, axis2=2)), axis=1)
+    return log_c, np.linalg.inv(L)
+
+
+def _weights_sx(x, log_c, means, inv_chol) -> list:
+    """h^k(x) from each component's log pi_k - log det L_k, mean and L_k^-1 (numbers or
+    symbols): the one expression of Eq. 6 that :func:`responsibilities_sx` (constants) and
+    :func:`responsibilities` (parameters, one Function per K and d) build."""
     logp = []
-    for k in range(len(priors)):
-        L = np.linalg.cholesky(covariances[k])
-        z = ca.DM(np.linalg.inv(L)) @ (x - ca.DM(means[k]))
+    for k in range(len(log_c)):
+        z = inv_chol[k] @ (x - means[k])
         # the squared Mahalanobis distance capped below inf: beyond ~1e154 standard deviations
         # from every component it would overflow, every log-density be -inf and log-sum-exp
         # give NaN (-inf - -inf); capped, the weights stay finite and sum to one
         q = ca.fmin(ca.sumsqr(z), MAX_SQUARED_DISTANCE)
-        logp.append(float(np.log(priors[k]) - np.sum(np.log(np.diag(L)))) - 0.5 * q)
+        logp.append(log_c[k] - 0.5 * q)
     _, e, total = logsumexp_parts_sx(logp)
     return [v / total for v in e]
+
+
+#: :func:`responsibilities`' Functions by (K, d): the GMM's numbers are parameters
+_WEIGHTS: dict = {}
+
+
+def _weights_function(K: int, d: int) -> ca.Function:
+    """h(x, log_c, means, inverse factors) for K components in d dimensions (cached)."""
+    f = _WEIGHTS.get((K, d))
+    if f is None:
+        x, c = ca.SX.sym("x", d), ca.SX.sym("c", K)
+        mu, W = ca.SX.sym("mu", d, K), ca.SX.sym("W", d * d, K)
+        h = _weights_sx(x, [c[k] for k in range(K)], [mu[:, k] for k in range(K)],
+                        [ca.reshape(W[:, k], d, d) for k in range(K)])
+        f = _WEIGHTS[(K, d)] = ca.Function("h", [x, c, mu, W], [ca.vertcat(*h)])
+    return f
 
 
 def gmr_sx(x, priors, means, covariances, in_idx, out_idx, with_cov: bool = False):
@@ -193,9 +224,12 @@ def responsibilities(X, priors, means, covariances) -> np.ndarray:
         Rows sum to one.
     """
     priors, means, covariances = _check_gmm(priors, means, covariances)
-    X2 = _points(X, means.shape[1])
-    x = ca.SX.sym("x", means.shape[1])
-    f = ca.Function("h", [x], [ca.vertcat(*responsibilities_sx(x, priors, means, covariances))])
+    K, d = means.shape
+    X2 = _points(X, d)
     if len(X2) == 0:
-        return np.zeros((0, len(priors)))
-    return batch_evaluate(f, X2.T)[0]
+        return np.zeros((0, K))
+    log_c, inv_chol = _gaussian_constants(priors, covariances)
+    f = _weights_function(K, d)
+    # the GMM's numbers once (CasADi repeats an input given with its own number of columns)
+    return batch_evaluate(f, X2.T, log_c[:, None], means.T,
+                          inv_chol.transpose(0, 2, 1).reshape(K, d * d).T)[0]
