@@ -79,6 +79,30 @@ def test_chunked_reproductions_equal_the_step_by_step_loop(spiral_model, substep
         assert len(loop) == max_steps - 1
 
 
+@pytest.mark.parametrize("threads", ["1", "2", "3"])
+def test_reproductions_on_several_threads_are_the_same_numbers(spiral_model, threads,
+                                                               monkeypatch):
+    """The starts integrated side by side on CasADi's threads (``map(m, "thread", T)``): bit
+    for bit the points and peaks of one thread."""
+    demos = decaying_spiral_demos()
+    starts = np.stack([p[0] for p in demos.positions])
+    kw = dict(dt=0.01, speed_tol=0.05, max_steps=3000, substeps=2, method="rk4",
+              return_peaks=True)
+    monkeypatch.setenv("SEDS_CASADI_THREADS", "1")
+    one, one_peaks = metrics.simulate_until_slow(spiral_model._function(), starts, **kw)
+    monkeypatch.setenv("SEDS_CASADI_THREADS", threads)
+    assert metrics.reproduction_threads(len(starts)) == min(int(threads), len(starts))
+    got, peaks = metrics.simulate_until_slow(spiral_model._function(), starts, **kw)
+    np.testing.assert_array_equal(got, one)
+    np.testing.assert_array_equal(peaks, one_peaks)
+
+
+def test_reproduction_threads_refuse_a_setting_with_no_meaning(monkeypatch):
+    monkeypatch.setenv("SEDS_CASADI_THREADS", "many")
+    with pytest.raises(ValueError, match="SEDS_CASADI_THREADS"):
+        metrics.reproduction_threads(4)
+
+
 def test_a_function_of_the_wrong_size_is_refused():
     x = ca.SX.sym("x", 3)
     with pytest.raises(ValueError, match="2 coordinates"):

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import ctypes
 import logging
+import os
 import threading
 
 import casadi as ca
@@ -330,6 +331,24 @@ def simulate_until_slow(field, starts: np.ndarray, dt: float = 0.01, speed_tol: 
 _CHUNK = 128
 
 
+def reproduction_threads(n_starts: int) -> int:
+    """Threads that integrate ``n_starts`` reproductions side by side: the environment
+    variable ``SEDS_CASADI_THREADS`` if set (worker processes set 1), else up to two, no
+    more than the starts nor the cores this process may run on."""
+    env = os.environ.get("SEDS_CASADI_THREADS")
+    if env is not None:
+        try:
+            return max(1, min(int(env), n_starts))
+        except ValueError:
+            raise ValueError(f"SEDS_CASADI_THREADS must be a positive integer, got {env!r}") \
+                from None
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        cores = os.cpu_count() or 1
+    return max(1, min(2, n_starts, cores))
+
+
 def _simulate_function(f: ca.Function, x: np.ndarray, h: float, substeps: int,
                        speed_tol: float, window: int, max_steps: int, rk4: bool = False
                        ) -> tuple[np.ndarray, np.ndarray]:
@@ -359,17 +378,21 @@ def _simulate_function(f: ca.Function, x: np.ndarray, h: float, substeps: int,
         out = one.fold(substeps - 1)(ca.vertcat(x1, 0))
         x1, sub = out[:d], out[d]
     n = _CHUNK
-    steps = ca.Function("step", [xs], [x1, v, sub]).map(m).mapaccum(n)
+    threads = reproduction_threads(m)
+    # each start's chunk of steps (mapaccum), the starts side by side (map), on `threads`
+    # threads of CasADi's own (the starts are independent: the same numbers on any number)
+    step = ca.Function("step", [xs], [x1, v, sub]).mapaccum(n)
+    steps = step.map(m, "thread", threads) if threads > 1 else step.map(m)
     traj = [x[None]]
     slow_count = [0]  # slow_count[j]: how many of steps 0 .. j-1 were slow
     peaks = np.zeros(m)
     cur = ca.DM(x.T)
     i = 0  # the index of the chunk's first step
     while True:
-        X, V, S = steps(cur)
-        Xn = np.asarray(X).T.reshape(n, m, d)
-        Vn = np.asarray(V).T.reshape(n, m, d)
-        Sn = np.asarray(S).reshape(n, m)
+        X, V, S = steps(cur)  # start by start: columns [start 0's n steps, start 1's, ...]
+        Xn = np.asarray(X).T.reshape(m, n, d).transpose(1, 0, 2)
+        Vn = np.asarray(V).T.reshape(m, n, d).transpose(1, 0, 2)
+        Sn = np.asarray(S).reshape(m, n).T
         slow = np.all(np.abs(Vn) < speed_tol, axis=(1, 2))
         slow_count.extend((slow_count[-1] + np.cumsum(slow)).tolist())
         # the loop's stop rule at each step j = i + s, all at once: the last `window` steps
