@@ -97,6 +97,19 @@ def test_reproductions_on_several_threads_are_the_same_numbers(spiral_model, thr
     np.testing.assert_array_equal(peaks, one_peaks)
 
 
+def test_the_dtw_of_reproductions_on_two_threads_is_the_same(spiral_model, monkeypatch):
+    demos = decaying_spiral_demos()
+    starts = np.stack([p[0] for p in demos.positions])
+    kw = dict(dt=0.01, speed_tol=0.05, max_steps=3000, method="rk4")
+    out = {}
+    for threads in ("1", "2"):
+        monkeypatch.setenv("SEDS_CASADI_THREADS", threads)
+        out[threads] = metrics.reproduction_dtw(spiral_model._function(), starts,
+                                                demos.positions, **kw)
+    np.testing.assert_array_equal(out["2"], out["1"])
+    assert np.all(out["1"] > 0)
+
+
 def test_reproduction_threads_refuse_a_setting_with_no_meaning(monkeypatch):
     monkeypatch.setenv("SEDS_CASADI_THREADS", "many")
     with pytest.raises(ValueError, match="SEDS_CASADI_THREADS"):

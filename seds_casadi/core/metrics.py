@@ -442,7 +442,15 @@ def reproduction_dtw(field, starts: np.ndarray, references, return_paths: bool =
                          "give one start per reference")
     out = simulate_until_slow(field, starts, **simulate_kw)
     paths = out[0] if simulate_kw.get("return_peaks") else out
-    dtw = np.array([dtw_distance(paths[:, n], ref) for n, ref in enumerate(references)])
+    threads = reproduction_threads(len(references))
+    if threads > 1 and _dtw_kernel() is not None:  # the compiled DTW runs without the GIL
+        from concurrent.futures import ThreadPoolExecutor
+
+        with ThreadPoolExecutor(threads) as pool:
+            dtw = np.array(list(pool.map(lambda n: dtw_distance(paths[:, n], references[n]),
+                                         range(len(references)))))
+    else:
+        dtw = np.array([dtw_distance(paths[:, n], ref) for n, ref in enumerate(references)])
     if not return_paths:
         return dtw
     return (dtw, *out) if simulate_kw.get("return_peaks") else (dtw, paths)
