@@ -105,3 +105,32 @@ def test_the_cached_responsibilities_are_the_symbolic_ones_and_the_oracles(seed,
     got = responsibilities(X, priors, means, covs)
     np.testing.assert_allclose(got, np.asarray(f(X.T)).T, rtol=1e-12, atol=1e-15)
     np.testing.assert_allclose(got, oracle(X, priors, means, covs), rtol=1e-9, atol=1e-12)
+
+
+def test_the_clusters_computed_in_the_background_are_those_computed_in_line(two_shapes,
+                                                                           monkeypatch):
+    """SEDS()'s choice of K with each K's k-means started on a background thread while the K
+    before it is fitted (problem.prefetch_labels) and with every k-means in line: the same
+    choice and the same model, bit for bit; the background thread ends with the fit."""
+    import threading
+
+    demos = two_shapes[1]
+    started = []
+    original = seds_module.prefetch_labels
+
+    def recording(embedding, Ks):
+        started.append(tuple(Ks))
+        return original(embedding, Ks)
+    monkeypatch.setattr(seds_module, "prefetch_labels", recording)
+    ahead = SEDS(n_components=[3, 4, 5], random_state=0).fit(demos).model_
+    assert started == [(3, 4, 5)]
+    monkeypatch.setattr(seds_module, "prefetch_labels", lambda embedding, Ks: (lambda: None))
+    inline = SEDS(n_components=[3, 4, 5], random_state=0).fit(demos).model_
+    assert ahead.n_components == inline.n_components
+    np.testing.assert_array_equal(ahead.means, inline.means)
+    np.testing.assert_array_equal(ahead.covariances, inline.covariances)
+    for _ in range(50):
+        if not any(t.name.startswith("seds-kmeans") for t in threading.enumerate()):
+            break
+        threading.Event().wait(0.1)
+    assert not any(t.name.startswith("seds-kmeans") for t in threading.enumerate())

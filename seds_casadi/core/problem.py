@@ -9,6 +9,7 @@ stable set, the Eq. 11 weights, and the per-sample objective kernels with exact 
 from __future__ import annotations
 
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import casadi as ca
@@ -248,11 +249,48 @@ class PCEmbedding:
     state : tuple
         The random state after the embedding (each K's k-means starts from it, as
         ``SpectralClustering`` would).
+    labels : dict
+        K -> a future of that K's k-means labels, when :func:`prefetch_labels` started them
+        in the background.
     """
 
     stride: int
     maps: np.ndarray
     state: tuple
+    labels: dict = field(default_factory=dict, compare=False, repr=False)
+
+
+def _kmeans_labels(embedding: PCEmbedding, K: int) -> np.ndarray:
+    """The K clusters of the embedding's first K columns (k-means from its random state)."""
+    from sklearn.cluster import k_means
+    from threadpoolctl import threadpool_limits
+
+    rs = np.random.RandomState()
+    rs.set_state(embedding.state)
+    # one thread: on 1,000 samples OpenMP's threads cost more than they save, and on busy cores
+    # they wait for each other (a run of Lloyd took 0.12 s with two threads on two loaded
+    # cores, a few ms on one)
+    with threadpool_limits(1):
+        _, labels, _ = k_means(embedding.maps[:, :K], K, random_state=rs, n_init=10)
+    return labels
+
+
+def prefetch_labels(embedding: PCEmbedding, Ks) -> Callable[[], None]:
+    """Start each K's k-means (in the order given) on a background thread, while the caller
+    fits the K before it (scikit-learn's k-means runs mostly without the GIL); the same labels
+    as computed in line. Returns a function that cancels those not started yet (call it when
+    the caller stops early)."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    pool = ThreadPoolExecutor(1, thread_name_prefix="seds-kmeans")
+    for K in Ks:
+        embedding.labels[K] = pool.submit(_kmeans_labels, embedding, K)
+    pool.shutdown(wait=False)
+
+    def cancel() -> None:
+        for fut in embedding.labels.values():
+            fut.cancel()
+    return cancel
 
 
 def pc_embedding(X: np.ndarray, Xd: np.ndarray, n_columns: int, random_state) -> PCEmbedding:
@@ -291,19 +329,11 @@ def _pc_gmm(X: np.ndarray, Xd: np.ndarray, K: int, random_state, reg: float,
     scikit-learn's ``SpectralClustering(affinity="precomputed", assign_labels="kmeans")``
     step by step, so that ``embedding`` (:func:`pc_embedding`, with at least K columns) can be
     shared by several K."""
-    from sklearn.cluster import k_means
-
     if embedding is None or embedding.maps.shape[1] < K:
         embedding = pc_embedding(X, Xd, K, random_state)
-    from threadpoolctl import threadpool_limits
-
-    rs = np.random.RandomState()
-    rs.set_state(embedding.state)
-    # one thread: on 1,000 samples OpenMP's threads cost more than they save, and on busy cores
-    # they wait for each other (a run of Lloyd took 0.12 s with two threads on two loaded
-    # cores, a few ms on one)
-    with threadpool_limits(1):
-        _, labels, _ = k_means(embedding.maps[:, :K], K, random_state=rs, n_init=10)
+    future = embedding.labels.get(K)
+    labels = (future.result() if future is not None and not future.cancelled()
+              else _kmeans_labels(embedding, K))
     Xs = X[::embedding.stride]
     d = X.shape[1]
     weights, means, covs = np.zeros(K), np.zeros((K, d)), np.zeros((K, d, d))

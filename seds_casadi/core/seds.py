@@ -35,7 +35,7 @@ from .model_selection import (
 )
 from .objectives import approach_constraints
 from .parametrization import Layout, stability_constraints
-from .problem import SEDSProblem, build_problem, data_scales, pc_embedding
+from .problem import SEDSProblem, build_problem, data_scales, pc_embedding, prefetch_labels
 from .report import warn_ends_apart
 from .search import held_out_scores
 from .settings import AUTO, PARAMETER_CONSTRAINTS, Hessian, Init, SEDSSettings, SettingsError
@@ -469,6 +469,19 @@ class SEDS(RegressorMixin, BaseEstimator):
                 lyapunov0 = estimate_lyapunov(X / sx, Xd / sv)
         fitted, metrics, table, ratios = {}, {}, {}, {}
         demo_peaks = np.array([np.linalg.norm(v, axis=1).max() for v in demos.velocities])
+        # each K's clusters computed in the background while the K before it is fitted
+        cancel = prefetch_labels(embedding, candidates) if embedding is not None else None
+        try:
+            self._fit_each(demos, settings, candidates, seed, embedding, lyapunov0, demo_peaks,
+                           fitted, metrics, table, ratios)
+        finally:
+            if cancel is not None:
+                cancel()
+        return self._choose(candidates, fitted, metrics, table, ratios)
+
+    def _fit_each(self, demos, settings, candidates, seed, embedding, lyapunov0, demo_peaks,
+                  fitted, metrics, table, ratios) -> None:
+        """Fit each K of ``candidates`` and score its reproductions (into the dicts given)."""
         for K in candidates:
             t0 = time.perf_counter()
             s_k = settings.with_components(K)
@@ -499,6 +512,11 @@ class SEDS(RegressorMixin, BaseEstimator):
             table[K] = {"rmse": sc["rmse"], "e_dot": sc["e_dot"], "dtw": sc["dtw"],
                         "peak_speed_ratios": ratios[K].tolist(), "time_scale": c,
                         "seconds": time.perf_counter() - t0}
+
+    @staticmethod
+    def _choose(candidates, fitted, metrics, table, ratios) -> StableDS:
+        """The candidate :func:`choose_by_reproduction` keeps, with the choice in its
+        ``fit_info``."""
         if not fitted:
             raise SolverError("no candidate K gave a certified model: "
                               + "; ".join(f"K={K}: {v['error']}" for K, v in table.items()),
