@@ -22,6 +22,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from test_reliability_30c import _plain_model
 
 from seds_casadi.codegen import compile_functions, compiler_available
 from seds_casadi.codegen.cache import CompileError, shared_library
@@ -139,25 +140,18 @@ def test_two_cached_libraries_swapped_with_their_records_are_rebuilt(tmp_path):
 # --------------------------------------- class 4: finite for every finite input (far away)
 
 def _strength_model():
-    """A certified 2-D model of two components (A_k = -diag(1, 2), -diag(2, 1)), without and
-    with a two-component strength factor over (x, log v), built from arrays."""
+    """A certified 2-D model of two components (test_reliability_30c's ``_plain_model``),
+    without and with a two-component strength factor over (x, log v)."""
     from seds_casadi import StableDS
     from seds_casadi.core.strength import StrengthFactor
 
-    target = np.array([0.5, -0.2])
-    mus = np.array([[1.0, 0.5], [-0.5, 1.5]])
-    As = [-np.diag([1.0, 2.0]), -np.diag([2.0, 1.0])]
-    means, covs = [], []
-    for mu, A, sx in zip(mus, As, (0.3, 0.5)):
-        Sx = sx ** 2 * np.eye(2)
-        means.append(np.r_[mu, A @ (mu - target)])
-        covs.append(np.block([[Sx, Sx @ A.T], [A @ Sx, A @ Sx @ A.T + 1e-3 * np.eye(2)]]))
+    plain = _plain_model()
     sf_means = np.array([[1.0, 0.5, np.log(0.8)], [-0.5, 1.5, np.log(0.3)]])
     sf_covs = np.array([[[0.09, 0.0, 0.02], [0.0, 0.09, -0.01], [0.02, -0.01, 0.05]],
                         [[0.25, 0.05, 0.0], [0.05, 0.25, 0.03], [0.0, 0.03, 0.08]]])
     strength = StrengthFactor([0.6, 0.4], sf_means, sf_covs, log_range=(np.log(0.2), np.log(1.0)))
-    plain = StableDS([0.5, 0.5], means, covs, target)
-    with_v = StableDS([0.5, 0.5], means, covs, target, strength=strength, strength_radius=0.05)
+    with_v = StableDS(plain.priors, plain.means, plain.covariances, plain.target,
+                      strength=strength, strength_radius=0.05)
     return plain, with_v
 
 

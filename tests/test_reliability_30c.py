@@ -265,17 +265,34 @@ def test_an_interrupt_while_the_command_line_is_built_exits_130(tmp_path, sig):
     try:
         _read_until(proc, "parser")
         time.sleep(0.1)
-        os.killpg(proc.pid, getattr(signal, sig))
+    finally:
+        text, _ = _signal_and_read(proc, getattr(signal, sig))
+    assert proc.returncode == 130, (proc.returncode, text[-2000:])
+    assert text.strip() == _FIT_INTERRUPTED, text
+    assert not (tmp_path / "out").exists()
+
+
+#: what ``seds-casadi fit`` prints when it is interrupted
+_FIT_INTERRUPTED = ("seds-casadi fit: interrupted; the files written so far are complete, the "
+                    "rest was not written")
+
+
+def _signal_and_read(proc, sig) -> tuple[str, float]:
+    """Send ``sig`` to the process group of ``proc`` (if it still runs), read its output until
+    it ends (killed after 10 s): (the output, seconds from the signal to the end)."""
+    import signal
+
+    t = time.perf_counter()
+    try:
+        if proc.poll() is None:
+            os.killpg(proc.pid, sig)
         text = proc.stdout.read()
         proc.wait(10)
     finally:
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
             proc.wait()
-    assert proc.returncode == 130, (proc.returncode, text[-2000:])
-    assert text.strip() == "seds-casadi fit: interrupted; the files written so far are " \
-        "complete, the rest was not written", text
-    assert not (tmp_path / "out").exists()
+    return text, time.perf_counter() - t
 
 
 def test_figures_temporary_files_of_the_older_naming_are_swept(tmp_path):
@@ -402,21 +419,12 @@ def test_an_interrupt_while_the_console_script_imports_the_package_exits_130(tmp
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
                             start_new_session=True, preexec_fn=_sigint_as_under_a_shell,
                             env=dict(os.environ, PYTHONPATH=root))
-    try:
-        time.sleep(0.2)
-        assert proc.poll() is None, proc.stdout.read()
-        t = time.perf_counter()
-        os.killpg(proc.pid, getattr(signal, sig))
-        text = proc.stdout.read()
-        proc.wait(10)
-        elapsed = time.perf_counter() - t
-    finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
+    time.sleep(0.2)
+    running = proc.poll() is None
+    text, elapsed = _signal_and_read(proc, getattr(signal, sig))
+    assert running, text
     assert proc.returncode == 130, (proc.returncode, text[-2000:])
-    assert text.strip() == "seds-casadi fit: interrupted; the files written so far are " \
-        "complete, the rest was not written", text
+    assert text.strip() == _FIT_INTERRUPTED, text
     assert elapsed < 2.0 and not out.exists()
 
 
