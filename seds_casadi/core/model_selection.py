@@ -44,10 +44,13 @@ def speed_penalty(ratios) -> float:
 
 #: the band of peak speeds, reproduction over demonstration, the choice aims for
 SPEED_BAND = (0.8, 1.25)
-#: :func:`peak_speed_factor` leaves this factor of room on each side of the band: the choice
-#: measures peaks on forward-Euler reproductions, the fit report on RK4 rollouts, and the two
-#: differ by a few per cent (a 7-D model centred at 0.80-1.25 by Euler read 0.79 in the report)
-SPEED_BAND_ROOM = 1.025
+#: :func:`peak_speed_factor` leaves this factor of room on each side of the band: the choice's
+#: peaks and the fit report's agree within 1 % (both RK4 at most 0.25 / stiffness per step;
+#: tests/test_fit_speed_29.py). It was 1.025 while the choice read forward-Euler reproductions
+#: (a 7-D model centred at 0.80-1.25 by Euler read 0.79 in the report); with the extra room a
+#: 7-D model whose ratios spread 1.50 (0.88-1.32) was left unmended, though a factor puts it
+#: at 0.82-1.22
+SPEED_BAND_ROOM = 1.01
 
 
 def peak_speed_factor(ratios) -> float | None:
