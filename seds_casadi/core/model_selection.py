@@ -60,7 +60,7 @@ def peak_speed_factor(ratios) -> float | None:
     multiplies every reproduction's speed by c, so peak-speed ratios r_n (reproduction over
     demonstration) become c r_n. When some r_n is above 1.25 and the ratios' spread fits the
     band with :data:`SPEED_BAND_ROOM` to spare on each side (max r / min r <= 1.25 / 0.8 /
-    1.025^2), c = 1 / sqrt(min r max r) centres them in it (in log scale). A model that is
+    SPEED_BAND_ROOM^2), c = 1 / sqrt(min r max r) centres them in it (in log scale). A model that is
     too slow is not sped up (that could break the gain limit), and one whose reproductions
     disagree more than the band allows cannot be mended by a factor: None in both cases, and
     when every ratio is already in the band.
