@@ -1782,7 +1782,8 @@ def main() -> int:
     t0 = time.perf_counter()
     print(f"{len(cases)} cases; building the base inputs ...", flush=True)
     build_base()
-    if any("--models" in " ".join(c.argv) for c in cases):
+    # (a concurrent case's argv is a list of command lines)
+    if any("--models" in " ".join(str(a) for a in c.argv) for c in cases):
         d = base_path("playrun")
         os.makedirs(d)
         p = _start(["play", "--quick", "--validate", "0", "--shots", "1"], d,
