@@ -496,3 +496,35 @@ S.restore_handlers(previous)
     assert r.returncode == 0, r.stderr[-2000:]
     assert r.stdout.split() == ["KeyboardInterrupt", "after"], (r.stdout, r.stderr[-2000:])
     assert not target.exists() and not list(tmp_path.iterdir())
+
+
+def test_a_signal_during_an_import_interrupts_once_the_import_is_done(tmp_path):
+    """A signal while a module is being imported (``play`` SIGHUP'd while exudyn's compiled
+    module initialised ended in exudyn's ImportError, a traceback: its initialisation took the
+    KeyboardInterrupt for a failure): the import completes and the interrupt is raised in our
+    code right after. The module sends the signal itself, from its first line."""
+    import subprocess
+    import sys
+
+    (tmp_path / "slowmod.py").write_text(
+        "import signal, time\nsignal.raise_signal(signal.SIGTERM)\ntime.sleep(0.05)\nDONE = 1\n")
+    code = f"""
+import sys, time
+sys.path.insert(0, {str(tmp_path)!r})
+from seds_casadi.core._signals import interrupt_on_termination, restore_handlers
+previous = interrupt_on_termination()
+try:
+    import slowmod
+    time.sleep(2.0)
+    print("no interrupt", flush=True)
+except KeyboardInterrupt:
+    print("KeyboardInterrupt", getattr(sys.modules.get("slowmod"), "DONE", None), flush=True)
+except BaseException as exc:
+    print(type(exc).__name__, exc, flush=True)
+restore_handlers(previous)
+"""
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60,
+                       env=dict(os.environ, PYTHONPATH=root))
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert r.stdout.split() == ["KeyboardInterrupt", "1"], (r.stdout, r.stderr[-2000:])

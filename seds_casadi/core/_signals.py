@@ -12,8 +12,8 @@ it reaches the caller.
 :func:`interrupt_on_termination` makes SIGTERM and SIGHUP end a command as Ctrl-C does. Its
 handler never raises while Python code runs under a CasADi call (SWIG's conversions, such as
 building a ``DM`` from a numpy array, try one overload after another and drop what the failed
-ones raised): there the signal is delivered again a few milliseconds later, until the
-interrupt can be raised where it reaches the caller (:func:`_raise_interrupt`).
+ones raised) or during an import: there the signal is delivered again a few milliseconds later,
+until the interrupt can be raised where it reaches the caller (:func:`_raise_interrupt`).
 """
 
 from __future__ import annotations
@@ -49,16 +49,18 @@ def _raise_interrupt(signum, frame) -> None:
     interrupt again (an interrupt that C code swallowed is not the last word).
 
     Under a CasADi call (a frame of CasADi's Python module on the stack: SWIG's conversions,
-    our callbacks) outside :class:`deferred_interrupts`, the exception could be dropped by C
+    our callbacks) or an import (a frame of the import machinery) outside
+    :class:`deferred_interrupts`, the exception could be dropped or turned into another by C
     code (measured: a SIGTERM during ``ca.DM(numpy array)`` left ``lasa`` running to the end,
-    exit 0): the signal is delivered again after :data:`REDELIVER_SECONDS` instead, until it
-    arrives outside CasADi. Inside :class:`deferred_interrupts` it is raised at once (the block
-    keeps it and raises it at its end)."""
+    exit 0; a SIGHUP while exudyn's compiled module initialised became exudyn's ImportError, a
+    traceback): the signal is delivered again after :data:`REDELIVER_SECONDS` instead, until
+    it arrives outside them. Inside :class:`deferred_interrupts` it is raised at once (the
+    block keeps it and raises it at its end)."""
     global _stopping
     now = time.monotonic()
     if _stopping is not None and now - _stopping < GRACE_SECONDS:
         return
-    if deferred_interrupts._depth == 0 and _under_casadi(frame):
+    if deferred_interrupts._depth == 0 and _in_fragile_code(frame):
         _redeliver(signum)
         return
     _stopping = now
@@ -72,11 +74,15 @@ def _casadi_dir() -> str | None:
     return os.path.dirname(os.path.abspath(path)) + os.sep if path else None
 
 
-def _under_casadi(frame) -> bool:
-    """Whether ``frame`` or one of its callers is code of CasADi's Python package."""
+def _in_fragile_code(frame) -> bool:
+    """Whether ``frame`` or one of its callers is code of CasADi's Python package or of the
+    import machinery (a module being imported: extension modules' initialisation turns an
+    exception raised in it into an ImportError)."""
     root = _casadi_dir()
-    while root is not None and frame is not None:
-        if os.path.abspath(frame.f_code.co_filename).startswith(root):
+    while frame is not None:
+        name = frame.f_code.co_filename
+        if name.startswith("<frozen importlib") or (
+                root is not None and os.path.abspath(name).startswith(root)):
             return True
         frame = frame.f_back
     return False
