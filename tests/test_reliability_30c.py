@@ -198,6 +198,19 @@ def _start(tmp_path, code: str, *args):
                             env=env, start_new_session=True)
 
 
+def _run_python(code: str, **kwargs):
+    """Run ``code`` in a new Python with this checkout importable; its completed process,
+    asserted to have exited 0 (its stderr in the message otherwise)."""
+    import subprocess
+    import sys
+
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
+                       env=dict(os.environ, PYTHONPATH=root), **kwargs)
+    assert r.returncode == 0, r.stderr[-2000:]
+    return r
+
+
 def _read_until(proc, marker: str, timeout: float = 120.0) -> str:
     seen = []
     deadline = time.perf_counter() + timeout
@@ -318,8 +331,6 @@ def test_an_interrupt_inside_casadis_conversions_is_an_interrupt():
     KeyboardInterrupt itself. The interrupt is raised where a signal's handler would raise it,
     at the first line of CasADi's conversion (a trace function: deterministic), in a
     subprocess."""
-    import subprocess
-    import sys
 
     code = """
 import sys
@@ -339,10 +350,7 @@ except BaseException as exc:
 finally:
     sys.settrace(None)
 """
-    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60,
-                       env=dict(os.environ, PYTHONPATH=root))
-    assert r.returncode == 0, r.stderr[-2000:]
+    r = _run_python(code)
     assert r.stdout.strip() == "KeyboardInterrupt", r.stdout
 
 
@@ -354,8 +362,6 @@ def test_a_signal_under_a_casadi_call_interrupts_once_the_call_returns(sig):
     2026-12-03): the DM is built, and the KeyboardInterrupt is raised in our code right after.
     The signal is sent at the conversion's first line by a trace function (deterministic), in
     a subprocess."""
-    import subprocess
-    import sys
 
     code = f"""
 import signal, sys, time
@@ -384,10 +390,7 @@ except BaseException as exc:
     print(type(exc).__name__, exc, flush=True)
 restore_handlers(previous)
 """
-    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60,
-                       env=dict(os.environ, PYTHONPATH=root))
-    assert r.returncode == 0, r.stderr[-2000:]
+    r = _run_python(code)
     assert r.stdout.strip() == "KeyboardInterrupt built sent", (r.stdout, r.stderr[-2000:])
 
 
@@ -433,8 +436,6 @@ def test_the_start_up_handlers_are_the_console_scripts_alone():
     it was; in the console script the command line takes them over and puts Python's own
     back when it ends (never the start-up handler, which would exit 130 after a complete
     run)."""
-    import subprocess
-    import sys
 
     code = ("import signal, sys; before = {s: signal.getsignal(s) for s in "
             "(signal.SIGINT, signal.SIGTERM)}; import seds_casadi; "
@@ -448,10 +449,7 @@ def test_the_start_up_handlers_are_the_console_scripts_alone():
             "main(['fit', 'none.npz'])\n"
             "print(signal.getsignal(signal.SIGINT) is signal.default_int_handler, "
             "signal.getsignal(signal.SIGTERM) is signal.SIG_DFL)\n")
-    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
-                       env=dict(os.environ, PYTHONPATH=root), preexec_fn=_sigint_as_under_a_shell)
-    assert r.returncode == 0, r.stderr[-2000:]
+    r = _run_python(code, preexec_fn=_sigint_as_under_a_shell)
     lines = r.stdout.strip().splitlines()
     assert lines[0] == "False True" and lines[1] == "True True", r.stdout
     assert lines[-1] == "True True", r.stdout
@@ -462,8 +460,6 @@ def test_a_result_is_not_put_in_place_while_a_signal_waits_for_its_second_delive
     file written in that time (the fuzz campaign: lasa's lasa.csv and summary.txt written
     just after a Ctrl-C, then exit 130) is not put in place: the interrupt is raised first.
     The second delivery is held 1 s here, so that the write surely falls in between."""
-    import subprocess
-    import sys
 
     target = tmp_path / "result.txt"
     code = f"""
@@ -490,10 +486,7 @@ time.sleep(1.5)  # the second delivery falls in the interrupt's grace: no second
 print("after", flush=True)
 S.restore_handlers(previous)
 """
-    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60,
-                       env=dict(os.environ, PYTHONPATH=root))
-    assert r.returncode == 0, r.stderr[-2000:]
+    r = _run_python(code)
     assert r.stdout.split() == ["KeyboardInterrupt", "after"], (r.stdout, r.stderr[-2000:])
     assert not target.exists() and not list(tmp_path.iterdir())
 
@@ -503,8 +496,6 @@ def test_a_signal_during_an_import_interrupts_once_the_import_is_done(tmp_path):
     module initialised ended in exudyn's ImportError, a traceback: its initialisation took the
     KeyboardInterrupt for a failure): the import completes and the interrupt is raised in our
     code right after. The module sends the signal itself, from its first line."""
-    import subprocess
-    import sys
 
     (tmp_path / "slowmod.py").write_text(
         "import signal, time\nsignal.raise_signal(signal.SIGTERM)\ntime.sleep(0.05)\nDONE = 1\n")
@@ -523,8 +514,5 @@ except BaseException as exc:
     print(type(exc).__name__, exc, flush=True)
 restore_handlers(previous)
 """
-    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60,
-                       env=dict(os.environ, PYTHONPATH=root))
-    assert r.returncode == 0, r.stderr[-2000:]
+    r = _run_python(code)
     assert r.stdout.split() == ["KeyboardInterrupt", "1"], (r.stdout, r.stderr[-2000:])
