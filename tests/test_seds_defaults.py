@@ -54,7 +54,7 @@ def test_choose_by_reproduction_is_the_smallest_k_within_tolerance(scores):
 # ------------------------------------------------------------------ the settings' rule
 def test_auto_settings_are_the_best_set_and_given_ones_override():
     s = _settings()
-    assert s.k_candidates == tuple(range(4, 11))
+    assert s.k_candidates == (4, 7, 10)
     assert s.problem.objective == "mse" and s.problem.init == "pc"
     assert s.problem.gmm == "fixed" and s.problem.lyapunov == "learned"
     assert s.problem.gain_limit == BEST_SETTINGS["gain_limit"]
@@ -115,6 +115,23 @@ def test_k_choice_needs_time_ordered_demonstrations(no_solve):
     X, Xd, _, _ = d.stacked()
     with pytest.raises(SettingsError, match="no time order"):
         SEDS().fit(X, Xd)
+
+
+@pytest.mark.parametrize("n_samples, expected", [
+    (200, (4, 7, 10)),  # the whole grid
+    (50, (4, 7, 9)),    # 10 needs more velocity values than its parameters: 9, the largest
+    (30, (4, 5)),       # K supported, joins
+    (20, (1, 2, 3)),    # below the grid: its 3 largest supported K
+])
+def test_the_default_grid_of_k_shrinks_to_what_the_data_support(n_samples, expected):
+    # a K is supported with 2 samples per component and one velocity value per parameter
+    t = np.linspace(0, 1, n_samples)
+    demos = Demonstrations([np.c_[np.cos(3 * t), np.sin(3 * t)] * (1 - t)[:, None]],
+                           dt=0.01)
+    learner = SEDS()
+    settings = learner._settings(demos)
+    assert settings.k_candidates == (4, 7, 10)
+    assert learner._supported_candidates(demos, settings) == expected
 
 
 def test_a_user_constraint_that_is_no_expression_is_a_clear_error():

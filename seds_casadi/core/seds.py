@@ -446,8 +446,11 @@ class SEDS(RegressorMixin, BaseEstimator):
                     f"{n} samples in {d}-D are too few for K = {bad} of the K listed in "
                     "n_components; list smaller K or record more demonstrations")
             return ok
-        if not ok:  # the default range: smaller K if the data are few
-            ok = tuple(K for K in range(1, settings.k_candidates[0]) if fits(K))[-3:]
+        top = max(settings.k_candidates)
+        if len(ok) < len(settings.k_candidates):  # the default grid, too large for the data:
+            # also the largest K it supports (or the 3 largest below the grid)
+            supported = [K for K in range(1, top + 1) if fits(K)]
+            ok = tuple(sorted(set(ok) | set(supported[-1:]))) if ok else tuple(supported[-3:])
         if not ok:
             raise SettingsError(f"{n} samples in {d}-D are too few for any K; record more "
                                 "demonstrations")
