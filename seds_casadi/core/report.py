@@ -262,9 +262,11 @@ def fit_report(model, demos: Demonstrations, reach_fraction: float = REACH_FRACT
     choice = dict(getattr(model, "fit_info", {}).get("choice", {}) or {})
     if choice.get("at_edge"):
         lo, hi = choice["range"]
+        tried = sorted(int(k) for k in choice.get("candidates", {})) or [lo, hi]
         msgs.append(f"K = {choice['n_components']} is at the edge of the range searched "
-                    f"({lo}-{hi}): a K outside it may be better; pass n_components="
-                    f"range({max(1, lo - 2)}, {hi + 3}) to search wider")
+                    f"({lo}-{hi}; tried {', '.join(map(str, tried))}): a K outside it may be "
+                    f"better; pass n_components=range({max(1, lo - 2)}, {hi + 3}) to search "
+                    "every K of a wider one")
     return FitReport(tuple(rows), tuple(msgs), choice, tol, tuple(out_paths), tuple(out_speeds),
                      dt, h)
 
