@@ -134,6 +134,25 @@ def test_the_default_grid_of_k_shrinks_to_what_the_data_support(n_samples, expec
     assert learner._supported_candidates(demos, settings) == expected
 
 
+def test_the_default_choice_tries_the_neighbours_of_its_best_k():
+    # real fits: the grid 4, 7, 10 first, then K - 1 and K + 1 of the best-scoring K until
+    # the best one's neighbours (within 4-10) have all been tried
+    demos = decaying_spiral_demos()
+    learner = SEDS(random_state=0).fit(demos)
+    ch = learner.fit_info_["choice"]
+    tried = sorted(ch["candidates"])
+    assert {4, 7, 10} <= set(tried) and set(tried) <= set(range(4, 11))
+    scores = {K: c["score"] for K, c in ch["candidates"].items() if c.get("score") is not None}
+    best = min(scores, key=scores.get)
+    assert all(K in tried for K in (best - 1, best + 1) if 4 <= K <= 10)
+    assert learner.model_.n_components == ch["n_components"] in tried
+    assert ch["range"] == [min(tried), max(tried)]
+    assert "neighbours" in ch["rule"]
+    # a K the user lists is tried as listed, with no neighbours
+    listed = SEDS(n_components=[4, 7], random_state=0).fit(demos).fit_info_["choice"]
+    assert sorted(listed["candidates"]) == [4, 7]
+
+
 def test_a_user_constraint_that_is_no_expression_is_a_clear_error():
     with pytest.raises(TypeError, match="CasADi expression"):
         SEDS(3, objective="mse", constraints=lambda m: [("x", 0, 1)]).fit(

@@ -95,7 +95,7 @@ def _add_fit(sub, quiet) -> None:
                                    "streamlines.png to --out. Shows the solver's progress.")
     f.add_argument("demonstrations", help="path to a .npz or .csv demonstrations file")
     f.add_argument("--components", "-K", type=_components, default="auto",
-                   help="number of Gaussians; 'auto': the K of 4, 7, 10 whose reproductions fit the "
+                   help="number of Gaussians; 'auto': the K in 4-10 whose reproductions fit the "
                         "demonstrations best (with the automatic settings); 'bic' [auto]")
     f.add_argument("--objective", choices=OBJECTIVES + ("auto",), default="auto",
                    help="objective; 'auto': mse with the automatic settings (see SEDS) [auto]")

@@ -38,7 +38,15 @@ from .parametrization import Layout, stability_constraints
 from .problem import SEDSProblem, build_problem, data_scales, pc_embedding, prefetch_labels
 from .report import warn_ends_apart
 from .search import held_out_scores
-from .settings import AUTO, PARAMETER_CONSTRAINTS, Hessian, Init, SEDSSettings, SettingsError
+from .settings import (
+    AUTO,
+    AUTO_K_RANGE,
+    PARAMETER_CONSTRAINTS,
+    Hessian,
+    Init,
+    SEDSSettings,
+    SettingsError,
+)
 from .stable_ds import StableDS
 from .strength import StrengthFactor, StrengthFactorLearner
 from .user_constraints import UserConstraints
@@ -401,11 +409,12 @@ class SEDS(RegressorMixin, BaseEstimator):
         _check_solver_options(settings)
         if settings.k_candidates is not None:
             candidates = self._supported_candidates(demos, settings)
+            pool = self._refinement_pool(demos, settings)
         warn_ends_apart(demos, stacklevel=2)
         t0 = time.perf_counter()
         bic = None
         if settings.k_candidates is not None:
-            self.model_ = self._fit_candidates(demos, settings, candidates)
+            self.model_ = self._fit_candidates(demos, settings, candidates, pool)
         else:
             if settings.problem.n_components is None:
                 settings, bic = self._choose_components(demos, settings)
@@ -432,12 +441,9 @@ class SEDS(RegressorMixin, BaseEstimator):
                 "from its start, and these samples have no time order: give n_components, or "
                 "pass the trajectories as Demonstrations")
         n, d = demos.n_samples, demos.n_dims
-        ps = settings.problem
 
         def fits(K: int) -> bool:
-            size = Layout(K, d, with_noise=ps.with_noise, lyapunov=ps.lyapunov,
-                          formulation=ps.formulation).size
-            return n >= 2 * K and n * d >= size
+            return _supports(demos, settings, K)
         ok = tuple(K for K in settings.k_candidates if fits(K))
         if settings.choice.get("n_components", "").startswith("given"):
             if len(ok) < len(settings.k_candidates):
@@ -456,18 +462,33 @@ class SEDS(RegressorMixin, BaseEstimator):
                                 "demonstrations")
         return ok
 
+    @staticmethod
+    def _refinement_pool(demos: Demonstrations, settings: SEDSSettings) -> tuple[int, ...]:
+        """The K the default choice may add around its best candidate: every K of
+        :data:`~seds_casadi.core.settings.AUTO_K_RANGE` the data support (none when the user
+        listed the K to try)."""
+        if settings.choice.get("n_components", "").startswith("given"):
+            return ()
+        lo, hi = AUTO_K_RANGE
+        return tuple(K for K in range(lo, hi + 1) if _supports(demos, settings, K))
+
     def _fit_candidates(self, demos: Demonstrations, settings: SEDSSettings,
-                        candidates: tuple[int, ...]) -> StableDS:
+                        candidates: tuple[int, ...], pool: tuple[int, ...] = ()) -> StableDS:
         """Fit each K of ``candidates`` to all demonstrations and keep the one whose
         reproductions of them score best (:func:`choose_by_reproduction`); the spectral
-        embedding of ``init="pc"`` is computed once for all."""
+        embedding of ``init="pc"`` is computed once for all.
+
+        With a ``pool`` (the default choice), the neighbours K - 1 and K + 1 in the pool of
+        the best-scoring K so far are fitted too, until the best one's neighbours have all
+        been tried: the grid finds the region, the neighbours its best K (on a 3-D helix
+        the grid 4, 7, 10 scored 0.30 / 0.15 / 0.16 and K = 8, found this way, 0.11)."""
         seed = sklearn_random_state(settings.problem.random_state)  # one seed for every K
         embedding = lyapunov0 = None  # neither depends on K: computed once for all
         X, Xd, _, _ = demos.stacked()
         sx, sv = data_scales(X, Xd)
         if sx > 0 and sv > 0:
             if settings.problem.init is Init.PC:
-                embedding = pc_embedding(X / sx, Xd / sv, max(candidates), seed)
+                embedding = pc_embedding(X / sx, Xd / sv, max(candidates + pool), seed)
             if settings.problem.learned_lyapunov:
                 lyapunov0 = estimate_lyapunov(X / sx, Xd / sv)
         fitted, metrics, table, ratios = {}, {}, {}, {}
@@ -477,10 +498,21 @@ class SEDS(RegressorMixin, BaseEstimator):
         try:
             self._fit_each(demos, settings, candidates, seed, embedding, lyapunov0, demo_peaks,
                            fitted, metrics, table, ratios)
+            tried = set(candidates)
+            while pool:
+                best = _best_candidate(metrics, ratios)
+                new = tuple(K for K in (best - 1, best + 1) if K in pool and K not in tried
+                            ) if best is not None else ()
+                if not new:
+                    break
+                tried.update(new)
+                self._fit_each(demos, settings, new, seed, embedding, lyapunov0, demo_peaks,
+                               fitted, metrics, table, ratios)
         finally:
             if cancel is not None:
                 cancel()
-        return self._choose(candidates, fitted, metrics, table, ratios)
+        order = tuple(sorted(tried))
+        return self._choose(order, fitted, metrics, {K: table[K] for K in order}, ratios)
 
     def _fit_each(self, demos, settings, candidates, seed, embedding, lyapunov0, demo_peaks,
                   fitted, metrics, table, ratios) -> None:
@@ -533,7 +565,9 @@ class SEDS(RegressorMixin, BaseEstimator):
         rng = (min(candidates), max(candidates))
         model.fit_info["choice"] = {
             "n_components": K, "candidates": {int(k): v for k, v in table.items()},
-            "rule": ("the smallest K whose reproductions of the demonstrations score within "
+            "rule": ("the neighbours of the best-scoring K tried until its neighbours are "
+                     "tried too (the default's grid only); then the smallest K whose "
+                     "reproductions of the demonstrations score within "
                      "5 % of the best (geometric mean of RMSE, e_dot and DTW, times a penalty "
                      "for peak speeds outside 0.8-1.25x the demonstrations'; "
                      "model_selection.choose_by_reproduction); a candidate whose reproductions "
@@ -850,6 +884,27 @@ def _check_solver_options(settings: SEDSSettings) -> None:
             f"IPOPT refused solver_options {dict(settings.solver_options)!r}: "
             f"{last.split(': ', 1)[-1].strip()} (names and types as in IPOPT's documentation, "
             "e.g. {'mu_strategy': 'adaptive', 'max_cpu_time': 60.0})") from None
+
+
+def _supports(demos: Demonstrations, settings: SEDSSettings, K: int) -> bool:
+    """Whether the data support K components: at least 2 samples per component and one
+    velocity value per parameter (as :func:`build_problem` asks)."""
+    ps = settings.problem
+    n, d = demos.n_samples, demos.n_dims
+    size = Layout(K, d, with_noise=ps.with_noise, lyapunov=ps.lyapunov,
+                  formulation=ps.formulation).size
+    return n >= 2 * K and n * d >= size
+
+
+def _best_candidate(metrics: dict, ratios: dict) -> int | None:
+    """The K of the lowest score of :func:`choose_by_reproduction` so far (None: none
+    scored)."""
+    try:
+        _, table = choose_by_reproduction(metrics, speed_ratios=ratios)
+    except ValueError:
+        return None
+    valid = {K: v for K, v in table.items() if v is not None}
+    return min(valid, key=valid.get) if valid else None
 
 
 def _peak_ratios(scores: dict, demo_peaks: np.ndarray) -> np.ndarray:

@@ -163,15 +163,15 @@ CLASSIC_SETTINGS = MappingProxyType({"objective": "direction", "init": "joint-em
                                      "gmm": "joint", "lyapunov": "identity", "gain_limit": None})
 #: the range of K searched by ``n_components="auto"`` (limited to what the data supports) ...
 AUTO_K_RANGE = (4, 10)
-#: ... every AUTO_K_STEP-th K of it: 4, 7 and 10. Neighbouring K give models whose
-#: reproductions score within the choice's 5 % tolerance of each other, so the K between cost
-#: fits without changing what is found: on the ds-opt LASA protocol, 4, 7, 10 gave test means
-#: of 4.82 / 0.058 / 1,397 (RMSE / e_dot / DTWD) in 0.22 s a shape against 4.84 / 0.058 /
-#: 1,433 in 0.48 s for every K of 4-10 (one core; benchmarks/README.md, issue 29), and on our
-#: own 3-D and 7-D motions every reproduction in the speed band, the 7-D fit in 17 s instead
-#: of 37 s
+#: ... first every AUTO_K_STEP-th K of it, 4, 7 and 10, then the neighbours K - 1 and K + 1
+#: of the best-scoring K until the best one's neighbours are all tried (``SEDS._fit_candidates``):
+#: the grid finds the region, the neighbours its best K. On the ds-opt LASA protocol this gave
+#: test means of 4.84 / 0.058 / 1,430 (RMSE / e_dot / DTWD) in a median 0.31 s a shape against
+#: 4.84 / 0.058 / 1,433 in 0.48 s for every K of 4-10 (one core; benchmarks/README.md, issue
+#: 29); the grid alone was faster (0.22 s) but on a 3-D helix it missed the best K by 37 % of
+#: the score and one reproduction peaked at 0.75x the demonstration's speed
 AUTO_K_STEP = 3
-#: the K tried by ``n_components="auto"``
+#: the K ``n_components="auto"`` tries first
 AUTO_K_CANDIDATES = tuple(range(AUTO_K_RANGE[0], AUTO_K_RANGE[1] + 1, AUTO_K_STEP))
 #: K taken by ``n_components="auto"`` when the settings are not :data:`BEST_SETTINGS` (their
 #: fits are too slow to try several K by default; the default K before issue 29)
@@ -405,9 +405,10 @@ class SEDSSettings:
             if fast:
                 candidates = AUTO_K_CANDIDATES
                 choice["n_components"] = (
-                    f"auto: the K of {', '.join(map(str, candidates))} ({AUTO_K_RANGE[0]}-"
-                    f"{AUTO_K_RANGE[1]} in steps of {AUTO_K_STEP}) whose reproductions of the "
-                    "demonstrations fit them best (model_selection.choose_by_reproduction)")
+                    f"auto: the K whose reproductions of the demonstrations fit them best "
+                    f"(model_selection.choose_by_reproduction) among {', '.join(map(str, candidates))} "
+                    f"({AUTO_K_RANGE[0]}-{AUTO_K_RANGE[1]} in steps of {AUTO_K_STEP}) and the "
+                    "neighbours of the best")
             else:
                 K = CLASSIC_K
                 choice["n_components"] = (
