@@ -16,9 +16,10 @@ demos), in one run and alternating shape by shape:
 Fit times include the choice of K; every fit single-threaded (``OMP_NUM_THREADS=1`` is set
 before numpy loads).
 
-``--own``: 3-D minimum-jerk arcs and 7-D joint-space reaching motions of our own
-(:func:`arcs_3d`, :func:`reaching_7d`), fitted with ``SEDS(random_state=0)``; the fit report
-(:func:`~seds_casadi.core.report.fit_report`) per demonstration: reached, peak speed ratio.
+``--own``: 3-D minimum-jerk arcs, 3-D helical approaches and 7-D joint-space reaching motions
+of our own (:func:`arcs_3d`, :func:`helix_3d`, :func:`reaching_7d`), fitted with
+``SEDS(random_state=0)``; the fit report (:func:`~seds_casadi.core.report.fit_report`) per
+demonstration: reached, peak speed ratio.
 
 Usage::
 
@@ -95,6 +96,21 @@ def reaching_7d(n_demos: int = 5, n_samples: int = 200, duration: float = 2.0, s
     return Demonstrations(pos, dt=duration / (n_samples - 1))
 
 
+def helix_3d(n_demos: int = 4, n_samples: int = 180, duration: float = 2.0, seed: int = 3
+             ) -> Demonstrations:
+    """3-D helical approaches [m] into the origin: 1.25 turns about the vertical axis at a
+    shrinking radius (0.15-0.25 m at the start) while descending from 0.2-0.35 m, minimum-jerk
+    in time (made to test the choice of K: its score is not smooth in K here)."""
+    rng = np.random.default_rng(seed)
+    s = min_jerk(np.linspace(0, 1, n_samples))
+    pos = []
+    for _ in range(n_demos):
+        r0, phase, z0 = rng.uniform(0.15, 0.25), rng.uniform(0, 2 * np.pi), rng.uniform(0.2, 0.35)
+        ang = phase + 2.5 * np.pi * s
+        pos.append(np.c_[(1 - s) * r0 * np.cos(ang), (1 - s) * r0 * np.sin(ang), (1 - s) * z0])
+    return Demonstrations(pos, dt=duration / (n_samples - 1))
+
+
 def _cert(model) -> bool:
     c = model.certificate
     return bool(c["max_eig_lyapunov"] < 0 and c["min_eig_cov"] > 0)
@@ -156,8 +172,9 @@ def run_lasa(shapes, seed: int, before: bool, peer) -> None:
 
 
 def run_own(seed: int) -> None:
-    for name, demos in (("3-D minimum-jerk arcs", arcs_3d()), ("7-D joint-space reaching",
-                                                                reaching_7d())):
+    for name, demos in (("3-D minimum-jerk arcs", arcs_3d()), ("3-D helical approaches",
+                                                                helix_3d()),
+                        ("7-D joint-space reaching", reaching_7d())):
         learner = SEDS(random_state=seed)
         model, sec = _fit(learner, demos)
         rep = learner.report(demos)
