@@ -144,19 +144,33 @@ class SEDS(RegressorMixin, BaseEstimator):
     ``ValueError`` (scikit-learn's ``InvalidParameterError``, also a ``TypeError``) naming the
     parameter and what it accepts.
 
+    With no settings (every ``"auto"`` default), ``SEDS()`` uses the measured best settings
+    (:data:`~seds_casadi.core.settings.BEST_SETTINGS`: ``objective="mse", init="pc",
+    gmm="fixed", lyapunov="learned", gain_limit=10``) and chooses K itself; a setting given
+    overrides its own entry, and naming the objective (or giving an arrival constraint,
+    constraints of one's own or the constrained form) gives SEDS's own settings for the rest
+    (:data:`~seds_casadi.core.settings.CLASSIC_SETTINGS`: P = I, joint EM, joint fit, no gain
+    limit, K = 5). ``fit_info["choice"]`` says what was chosen and why.
+
     Parameters
     ----------
-    n_components : int or "bic", default 5
-        Number K of Gaussians; ``"bic"`` picks K in 1..15 by the BIC of a GMM on [x; xdot] at
+    n_components : int, sequence of int, "auto" or "bic", default "auto"
+        Number K of Gaussians. ``"auto"``: with the automatic settings, the K in 4-10 whose
+        reproductions of the demonstrations fit them best
+        (:func:`~seds_casadi.core.model_selection.choose_by_reproduction`; it fits 4, 7 and 10,
+        then the neighbours of the best-scoring K until its neighbours are all tried), else 5.
+        A sequence: the K tried by the same criterion, exactly those. ``"bic"`` picks K in
+        1..15 by the BIC of a GMM on [x; xdot] at
         the elbow of the BIC curve, as ds-opt does
         (:func:`~seds_casadi.core.model_selection.bic_n_components`; on smooth data the BIC
         minimum lies at the largest K tried; the scores are in ``fit_info["bic"]``).
         :class:`~seds_casadi.core.search.DemoSearchCV` (held-out demonstrations, reproduced and
         scored) or ``GridSearchCV`` over K are the held-out alternatives.
-    objective : {"direction", "mse", "likelihood"}, default "direction"
-        ``"direction"``: the paper's Eq. 9 (weighted cosine between demonstrated and model
-        velocities, weights of Eq. 11); ``"mse"`` and ``"likelihood"``: the original SEDS objectives
-        (mean squared velocity error; negative log-likelihood of the joint GMM).
+    objective : {"auto", "direction", "mse", "likelihood"}, default "auto"
+        ``"auto"``: ``"mse"`` with the automatic settings. ``"direction"``: the paper's Eq. 9
+        (weighted cosine between demonstrated and model velocities, weights of Eq. 11); ``"mse"``
+        and ``"likelihood"``: the original SEDS objectives (mean squared velocity error; negative
+        log-likelihood of the joint GMM).
     random_state : int, numpy Generator or None
         Seed of the k-means + EM initialisation (the fit is deterministic for a given seed).
     omega_lower, omega_upper : float, default 1.0 and 2.0
@@ -193,8 +207,9 @@ class SEDS(RegressorMixin, BaseEstimator):
         with motion across it at least ``approach_ratio`` times faster (an extension of the paper
         for hitting motions; see :func:`seds_casadi.core.objectives.approach_constraints`).
     approach_ratio : float, default 4.0
-    lyapunov : {"identity", "learned"}, default "identity"
-        The Lyapunov function that certifies the model. ``"identity"``: SEDS's
+    lyapunov : {"auto", "identity", "learned"}, default "auto"
+        ``"auto"``: ``"learned"`` with the automatic settings, else ``"identity"``. The Lyapunov
+        function that certifies the model. ``"identity"``: SEDS's
         V(x) = |x - x*|^2 (A_k + A_k^T < 0). ``"learned"``: V(x) = (x - x*)^T P (x - x*) with a
         symmetric positive definite P optimised jointly with the GMM (A_k^T P + P A_k < 0, the
         condition of LPV-DS), which lets the model follow motions that first move away from the
@@ -238,17 +253,20 @@ class SEDS(RegressorMixin, BaseEstimator):
     strength_components : int or None, default None
         Gaussians of the strength factor's GMM (``speed_calibration="strength"``); None: the
         model's own K.
-    gain_limit : float or None, default None
-        Bound the stiffness of the components: the entries of B_k within +-sqrt(g) and of W_k
-        within +-g (A_k = -(B_k B_k^T + m I) + W_k - W_k^T; constrained form: the entries of
-        A_k within +-d g), in the scaled frame where positions and velocities have unit RMS, so
-        every |eigenvalue of A_k| stays within about d g times the data's own rate. Without it
-        a thin component can reach rates of hundreds per second that explicit integrators at
-        the data's step cannot follow (on LASA, forward Euler at 0.01 s diverged from a rate of
-        540/s). None: unbounded, as SEDS (measured in ``benchmarks/README.md``). The value
-        is data-dependent: 10 suited LASA, but a bound can also keep IPOPT from the better fit.
-    init : {"joint-em", "lpv", "pc"}, default "joint-em"
-        IPOPT's starting point. ``"joint-em"`` (SEDS's): k-means + EM on [x; xdot], each
+    gain_limit : float, None or "auto", default "auto"
+        ``"auto"``: 10 with the automatic settings, else None. Bound the stiffness of the
+        components: the entries of B_k within +-sqrt(g) and of W_k within +-g
+        (A_k = -(B_k B_k^T + m I) + W_k - W_k^T; constrained form: the entries of A_k within
+        +-d g), in the scaled frame
+        where positions and velocities have unit RMS, so every |eigenvalue of A_k| stays within
+        about d g times the data's own rate. Without it a thin component can reach rates of hundreds
+        per second that explicit integrators at the data's step cannot follow (on LASA, forward
+        Euler at 0.01 s diverged from a rate of 540/s). None: unbounded, as SEDS (measured in
+        ``benchmarks/README.md``). The value is data-dependent: 10 suited LASA, but a bound can also
+        keep IPOPT from the better fit.
+    init : {"auto", "joint-em", "lpv", "pc"}, default "auto"
+        ``"auto"``: ``"pc"`` with the automatic settings, else ``"joint-em"``. IPOPT's starting
+        point. ``"joint-em"`` (SEDS's): k-means + EM on [x; xdot], each
         component's regression gain projected onto the stable set. ``"lpv"`` (LPV-DS's, Figueroa
         and Billard 2018, first two steps): EM on the positions alone, then the gains of least
         velocity error under that GMM's mixing, stable for the initial P (a small IPOPT problem
@@ -261,8 +279,9 @@ class SEDS(RegressorMixin, BaseEstimator):
         cut into ``n_components`` clusters by spectral clustering; each cluster then follows
         one locally linear piece of the motion. PC-GMM samples a Dirichlet-process mixture and
         so also chooses K; here K stays the learner's (choose it with :class:`DemoSearchCV`).
-    gmm : {"joint", "fixed"}, default "joint"
-        ``"joint"`` (SEDS, Eq. 10): IPOPT optimises the GMM and the dynamics together.
+    gmm : {"auto", "joint", "fixed"}, default "auto"
+        ``"auto"``: ``"fixed"`` with the automatic settings, else ``"joint"``. ``"joint"`` (SEDS,
+        Eq. 10): IPOPT optimises the GMM and the dynamics together.
         ``"fixed"``: the priors, means and position covariances keep the values of ``init``
         and IPOPT optimises the dynamics (the A_k and, with ``lyapunov="learned"``, P) under
         that fixed mixing, as LPV-DS does after its clustering; the model is certified the
