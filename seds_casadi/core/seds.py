@@ -160,8 +160,7 @@ class SEDS(RegressorMixin, BaseEstimator):
         (:func:`~seds_casadi.core.model_selection.choose_by_reproduction`; it fits 4, 7 and 10,
         then the neighbours of the best-scoring K until its neighbours are all tried), else 5.
         A sequence: the K tried by the same criterion, exactly those. ``"bic"`` picks K in
-        1..15 by the BIC of a GMM on [x; xdot] at
-        the elbow of the BIC curve, as ds-opt does
+        1..15 by the BIC of a GMM on [x; xdot] at the elbow of the BIC curve, as ds-opt does
         (:func:`~seds_casadi.core.model_selection.bic_n_components`; on smooth data the BIC
         minimum lies at the largest K tried; the scores are in ``fit_info["bic"]``).
         :class:`~seds_casadi.core.search.DemoSearchCV` (held-out demonstrations, reproduced and
@@ -257,13 +256,12 @@ class SEDS(RegressorMixin, BaseEstimator):
         ``"auto"``: 10 with the automatic settings, else None. Bound the stiffness of the
         components: the entries of B_k within +-sqrt(g) and of W_k within +-g
         (A_k = -(B_k B_k^T + m I) + W_k - W_k^T; constrained form: the entries of A_k within
-        +-d g), in the scaled frame
-        where positions and velocities have unit RMS, so every |eigenvalue of A_k| stays within
-        about d g times the data's own rate. Without it a thin component can reach rates of hundreds
-        per second that explicit integrators at the data's step cannot follow (on LASA, forward
-        Euler at 0.01 s diverged from a rate of 540/s). None: unbounded, as SEDS (measured in
-        ``benchmarks/README.md``). The value is data-dependent: 10 suited LASA, but a bound can also
-        keep IPOPT from the better fit.
+        +-d g), in the scaled frame where positions and velocities have unit RMS, so every
+        |eigenvalue of A_k| stays within about d g times the data's own rate. Without it a thin
+        component can reach rates of hundreds per second that explicit integrators at the data's
+        step cannot follow (on LASA, forward Euler at 0.01 s diverged from a rate of 540/s).
+        None: unbounded, as SEDS (measured in ``benchmarks/README.md``). The value is
+        data-dependent: 10 suited LASA, but a bound can also keep IPOPT from the better fit.
     init : {"auto", "joint-em", "lpv", "pc"}, default "auto"
         ``"auto"``: ``"pc"`` with the automatic settings, else ``"joint-em"``. IPOPT's starting
         point. ``"joint-em"`` (SEDS's): k-means + EM on [x; xdot], each
@@ -531,7 +529,8 @@ class SEDS(RegressorMixin, BaseEstimator):
             if cancel is not None:
                 cancel()
         order = tuple(sorted(tried))
-        return self._choose(order, fitted, metrics, {K: table[K] for K in order}, ratios)
+        return self._choose(order, fitted, metrics, {K: table[K] for K in order}, ratios,
+                            refined=bool(pool))
 
     def _fit_each(self, demos, settings, candidates, seed, embedding, lyapunov0, demo_peaks,
                   fitted, metrics, table, ratios) -> None:
@@ -568,7 +567,7 @@ class SEDS(RegressorMixin, BaseEstimator):
                         "seconds": time.perf_counter() - t0}
 
     @staticmethod
-    def _choose(candidates, fitted, metrics, table, ratios) -> StableDS:
+    def _choose(candidates, fitted, metrics, table, ratios, refined: bool = False) -> StableDS:
         """The candidate :func:`choose_by_reproduction` keeps, with the choice in its
         ``fit_info``."""
         if not fitted:
@@ -584,9 +583,9 @@ class SEDS(RegressorMixin, BaseEstimator):
         rng = (min(candidates), max(candidates))
         model.fit_info["choice"] = {
             "n_components": K, "candidates": {int(k): v for k, v in table.items()},
-            "rule": ("the neighbours of the best-scoring K tried until its neighbours are "
-                     "tried too (the default's grid only); then the smallest K whose "
-                     "reproductions of the demonstrations score within "
+            "rule": (("the K of the grid, then the neighbours of the best-scoring K until its "
+                      "neighbours are tried too; of those, " if refined else "")
+                     + "the smallest K whose reproductions of the demonstrations score within "
                      "5 % of the best (geometric mean of RMSE, e_dot and DTW, times a penalty "
                      "for peak speeds outside 0.8-1.25x the demonstrations'; "
                      "model_selection.choose_by_reproduction); a candidate whose reproductions "
