@@ -458,10 +458,7 @@ class SEDS(RegressorMixin, BaseEstimator):
                 "from its start, and these samples have no time order: give n_components, or "
                 "pass the trajectories as Demonstrations")
         n, d = demos.n_samples, demos.n_dims
-
-        def fits(K: int) -> bool:
-            return _supports(demos, settings, K)
-        ok = tuple(K for K in settings.k_candidates if fits(K))
+        ok = tuple(K for K in settings.k_candidates if _supports(demos, settings, K))
         if settings.choice.get("n_components", "").startswith("given"):
             if len(ok) < len(settings.k_candidates):
                 bad = [K for K in settings.k_candidates if K not in ok]
@@ -469,10 +466,10 @@ class SEDS(RegressorMixin, BaseEstimator):
                     f"{n} samples in {d}-D are too few for K = {bad} of the K listed in "
                     "n_components; list smaller K or record more demonstrations")
             return ok
-        top = max(settings.k_candidates)
         if len(ok) < len(settings.k_candidates):  # the default grid, too large for the data:
             # also the largest K it supports (or the 3 largest below the grid)
-            supported = [K for K in range(1, top + 1) if fits(K)]
+            supported = [K for K in range(1, max(settings.k_candidates) + 1)
+                         if _supports(demos, settings, K)]
             ok = tuple(sorted(set(ok) | set(supported[-1:]))) if ok else tuple(supported[-3:])
         if not ok:
             raise SettingsError(f"{n} samples in {d}-D are too few for any K; record more "
