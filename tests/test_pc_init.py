@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 from oracles import decaying_spiral_demos
 
 from seds_casadi import SEDS
-from seds_casadi.core.problem import _pc_gmm, gmm_indices, pc_similarity
+from seds_casadi.core.problem import _pc_gmm, gmm_indices, pc_embedding, pc_similarity
 
 
 def _similarity_loop(X, Xd):
@@ -45,6 +45,53 @@ def test_similarity_matches_the_pairwise_definition(seed, n, d):
     np.testing.assert_allclose(S, S.T, rtol=0, atol=0)
     assert np.all(S >= 0) and np.all(S <= 2 + 1e-12)
     np.testing.assert_allclose(np.diag(S)[1:], 2.0, rtol=1e-12)  # itself: same place, cos 1
+
+
+@settings(max_examples=15, deadline=None)
+@given(seed=st.integers(0, 10_000), n=st.integers(12, 120), d=st.integers(2, 4),
+       k=st.integers(1, 5))
+def test_embedding_matches_scikit_learns_spectral_embedding(seed, n, d, k):
+    """Our step-by-step embedding (Cholesky shift-invert) against scikit-learn's
+    ``spectral_embedding``: the same columns (up to rounding) and the same random state after
+    it, so each K's k-means starts where SpectralClustering's would."""
+    import warnings
+
+    from sklearn.manifold import spectral_embedding
+    from sklearn.utils import check_random_state
+
+    rng = np.random.default_rng(seed)
+    t = np.linspace(0, 1, n)[:, None]
+    X = np.hstack([np.cos(3 * t), np.sin(3 * t), t ** 2, t][:d]) + 0.05 * rng.normal(size=(n, d))
+    Xd = np.gradient(X, axis=0) + 0.01 * rng.normal(size=(n, d))
+    ours = pc_embedding(X, Xd, k, seed)
+    rs = check_random_state(seed)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        theirs = spectral_embedding(pc_similarity(X, Xd), n_components=k, random_state=rs,
+                                    drop_first=False)
+    assert ours.maps.shape == (n, k)
+    # eigenvectors of (nearly) equal eigenvalues are defined only up to a rotation: compare
+    # the spaces they span, and the columns themselves when the spectrum is well separated
+    Q1, Q2 = np.linalg.qr(ours.maps)[0], np.linalg.qr(theirs)[0]
+    assert np.linalg.norm(Q1 - Q2 @ (Q2.T @ Q1)) < 1e-6
+    for a, b in zip(ours.state, rs.get_state()):
+        assert np.array_equal(np.asarray(a), np.asarray(b))
+
+
+def test_embedding_equals_scikit_learns_on_a_lasa_shape():
+    """On LASA's Angle (1,000 samples, K up to 10) the columns agree to rounding."""
+    from sklearn.manifold import spectral_embedding
+    from sklearn.utils import check_random_state
+
+    from seds_casadi.app.lasa import dsopt_sets
+    from seds_casadi.core.problem import data_scales
+
+    X, Xd, _, _ = dsopt_sets("Angle")["train"].demonstrations().stacked()
+    sx, sv = data_scales(X, Xd)
+    ours = pc_embedding(X / sx, Xd / sv, 10, 0)
+    theirs = spectral_embedding(pc_similarity(X[::2] / sx, Xd[::2] / sv), n_components=10,
+                                random_state=check_random_state(0), drop_first=False)
+    np.testing.assert_allclose(ours.maps, theirs, atol=1e-10)
 
 
 def test_clusters_follow_the_direction_where_positions_alone_cannot():

@@ -265,7 +265,9 @@ def _unpack_function(K: int, d: int, with_noise: bool, margin: float, lyapunov: 
     outs = [pri, *p["mu"], *p["L"], *p["A"], P]
     if with_noise:
         outs += p["LQ"]
-    return ca.Function("unpack", [theta], outs)
+    # one output, every piece vectorised (column-major): one conversion to numpy instead of
+    # one per piece (3 K + 2 of them, 50 us each: 1.6 ms a call at K = 10)
+    return ca.Function("unpack", [theta], [ca.vertcat(*[ca.vec(o) for o in outs])])
 
 
 def unpack_numpy(theta: np.ndarray, layout: Layout, margin: float) -> dict[str, np.ndarray]:
@@ -280,12 +282,15 @@ def unpack_numpy(theta: np.ndarray, layout: Layout, margin: float) -> dict[str, 
     K, d = layout.K, layout.d
     f = _unpack_function(K, d, layout.with_noise, float(margin), layout.lyapunov,
                          layout.formulation)
-    out = [np.asarray(v) for v in f(np.asarray(theta, dtype=float))]
-    L = np.stack(out[1 + K: 1 + 2 * K])
-    res = {"priors": np.exp(out[0].ravel()), "mu": np.stack([v.ravel() for v in out[1: 1 + K]]),
-           "Sx": L @ np.transpose(L, (0, 2, 1)), "A": np.stack(out[1 + 2 * K: 1 + 3 * K]),
-           "P": 0.5 * (out[1 + 3 * K] + out[1 + 3 * K].T)}
+    flat = np.asarray(f(np.asarray(theta, dtype=float))).ravel()
+    pri, rest = flat[:K], flat[K:]
+    mu = rest[: K * d].reshape(K, d).copy()
+    blocks = np.ascontiguousarray(rest[K * d:].reshape(-1, d, d).transpose(0, 2, 1))  # each
+    # d x d piece came column-major
+    L, A, P = blocks[:K], blocks[K: 2 * K], blocks[2 * K]
+    res = {"priors": np.exp(pri), "mu": mu, "Sx": L @ np.transpose(L, (0, 2, 1)), "A": A.copy(),
+           "P": 0.5 * (P + P.T)}
     if layout.with_noise:
-        LQ = np.stack(out[2 + 3 * K:])
+        LQ = blocks[2 * K + 1:]
         res["Q"] = LQ @ np.transpose(LQ, (0, 2, 1))
     return res
