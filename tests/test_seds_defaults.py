@@ -201,6 +201,30 @@ def test_report_reproduces_each_demonstration(auto_fit, tmp_path):
         assert any("edge of the range" in w for w in rep.warnings)
 
 
+@pytest.mark.parametrize("factor", [0.4, 1.0, 2.5])
+def test_report_warns_about_reproductions_too_fast_or_too_slow(auto_fit, factor):
+    """The same paths run c times as fast (_time_scaled): every ratio scales by c, and the
+    warnings follow the ratios, above OVERSHOOT or below UNDERSHOOT, demonstration by
+    demonstration."""
+    from seds_casadi.core.report import OVERSHOOT, UNDERSHOOT
+    from seds_casadi.core.seds import _time_scaled
+
+    learner, demos = auto_fit
+    base = learner.report(demos)
+    rep = fit_report(_time_scaled(learner.model_, factor), demos)
+    for r0, r in zip(base.rows, rep.rows, strict=True):
+        assert r.speed_ratio == pytest.approx(factor * r0.speed_ratio, rel=0.02)
+        fast = any(f"demonstration {r.demo} peaks at {r.speed_ratio:.2f}" in w
+                   for w in rep.warnings)
+        slow = any(f"demonstration {r.demo} peaks at only" in w for w in rep.warnings)
+        assert fast == (r.speed_ratio > OVERSHOOT)
+        assert slow == (r.speed_ratio < UNDERSHOOT)
+    if factor != 1.0:  # the fit's ratios are near 1 (0.98-1.01): with 0.4 or 2.5 all warn
+        assert sum("peaks at" in w for w in rep.warnings) == demos.n_demos
+    with pytest.raises(ValueError, match="undershoot"):
+        fit_report(learner.model_, demos, undershoot=1.2)
+
+
 def test_demonstrations_that_end_apart_are_warned_about():
     d = decaying_spiral_demos()
     pos = [p.copy() for p in d.positions]

@@ -14,8 +14,9 @@ can act on:
 It warns about what a user would otherwise have to find out by hand: demonstrations whose end
 points lie apart (each is shifted onto its own end point before the fit, SEDS's preprocessing:
 :func:`end_offsets`), reproductions whose peak speed exceeds the demonstration's by more than
-:data:`OVERSHOOT` - 1, a reproduction that does not reach the target, and a K chosen at the edge
-of the range searched (``SEDS(n_components="auto")``).
+:data:`OVERSHOOT` - 1 or stays below :data:`UNDERSHOOT` of it, a reproduction that does not
+reach the target, and a K chosen at the edge of the range searched
+(``SEDS(n_components="auto")``).
 """
 
 from __future__ import annotations
@@ -31,7 +32,8 @@ from .metrics import dtw_distance, pointwise_direction_error, velocity_rmse
 from .search import reproduction_substeps
 
 __all__ = ["DemoReport", "FitReport", "fit_report", "end_offsets", "warn_ends_apart",
-           "REACH_FRACTION", "DURATION_FACTOR", "OVERSHOOT", "ENDS_APART", "SPEED_BAND"]
+           "REACH_FRACTION", "DURATION_FACTOR", "OVERSHOOT", "UNDERSHOOT", "ENDS_APART",
+           "SPEED_BAND"]
 
 #: a reproduction reaches the target when it comes within this fraction of the data's extent
 REACH_FRACTION = 0.01
@@ -39,6 +41,10 @@ REACH_FRACTION = 0.01
 DURATION_FACTOR = 3.0
 #: a reproduction whose peak speed is above this times the demonstration's is warned about
 OVERSHOOT = 1.5
+#: ... and one whose peak speed is below this times the demonstration's (the mirror of
+#: OVERSHOOT: 1 / 1.5); a motion that slow arrives late, and the hitting motion's strength
+#: factor or a larger K may serve better
+UNDERSHOOT = 1.0 / OVERSHOOT
 #: the band of peak-speed ratios the report calls "as demonstrated"
 SPEED_BAND = (0.8, 1.25)
 #: demonstrations whose end points lie farther than this fraction of the extent from the target
@@ -189,8 +195,8 @@ class FitReport:
 
 
 def fit_report(model, demos: Demonstrations, reach_fraction: float = REACH_FRACTION,
-               duration_factor: float = DURATION_FACTOR, overshoot: float = OVERSHOOT
-               ) -> FitReport:
+               duration_factor: float = DURATION_FACTOR, overshoot: float = OVERSHOOT,
+               undershoot: float = UNDERSHOOT) -> FitReport:
     """Reproduce every demonstration from its start and compare (see the module docstring).
 
     Parameters
@@ -205,11 +211,16 @@ def fit_report(model, demos: Demonstrations, reach_fraction: float = REACH_FRACT
         A reproduction is given this many times the longest demonstration's duration.
     overshoot : float, default 1.5
         Warn when a reproduction's peak speed exceeds this times its demonstration's.
+    undershoot : float, default 1 / 1.5
+        Warn when a reproduction's peak speed is below this times its demonstration's.
 
     Returns
     -------
     FitReport
     """
+    if not (np.isfinite(overshoot) and overshoot > 1.0 and 0.0 < undershoot < 1.0):
+        raise ValueError(f"overshoot must be above 1 and undershoot within (0, 1), got "
+                         f"{overshoot!r} and {undershoot!r}")
     model = getattr(model, "model_", model)
     if not isinstance(demos, Demonstrations):
         raise TypeError(f"fit_report takes Demonstrations, got {type(demos).__name__}")
@@ -258,6 +269,10 @@ def fit_report(model, demos: Demonstrations, reach_fraction: float = REACH_FRACT
         if row.speed_ratio > overshoot:
             msgs.append(f"the reproduction of demonstration {n + 1} peaks at {row.speed_ratio:.2f} "
                         f"x the demonstration's speed (more than {overshoot:g} x)")
+        elif row.speed_ratio < undershoot:
+            msgs.append(f"the reproduction of demonstration {n + 1} peaks at only "
+                        f"{row.speed_ratio:.2f} x the demonstration's speed (less than "
+                        f"{undershoot:.2g} x): it moves slower than demonstrated")
     msgs = _ends_apart_messages(demos) + msgs
     choice = dict(getattr(model, "fit_info", {}).get("choice", {}) or {})
     if choice.get("at_edge"):
