@@ -285,8 +285,8 @@ def unpack_numpy(theta: np.ndarray, layout: Layout, margin: float) -> dict[str, 
     flat = np.asarray(f(np.asarray(theta, dtype=float))).ravel()
     pri, rest = flat[:K], flat[K:]
     mu = rest[: K * d].reshape(K, d).copy()
-    blocks = np.ascontiguousarray(rest[K * d:].reshape(-1, d, d).transpose(0, 2, 1))  # each
-    # d x d piece came column-major
+    # the d x d pieces (L_k, A_k, P, L_Q,k) came column-major
+    blocks = np.ascontiguousarray(rest[K * d:].reshape(-1, d, d).transpose(0, 2, 1))
     L, A, P = blocks[:K], blocks[K: 2 * K], blocks[2 * K]
     res = {"priors": np.exp(pri), "mu": mu, "Sx": L @ np.transpose(L, (0, 2, 1)), "A": A.copy(),
            "P": 0.5 * (P + P.T)}

@@ -744,7 +744,6 @@ def check_approach(demos: Demonstrations, X: np.ndarray, Xd: np.ndarray) -> None
     from x* on average (a motion that first moves away, which SEDS's quadratic Lyapunov function
     cannot follow well).
     """
-
     from .errors import ConvergenceWarning
 
     r, v = np.linalg.norm(X, axis=1), np.linalg.norm(Xd, axis=1)
