@@ -78,6 +78,27 @@ def test_embedding_matches_scikit_learns_spectral_embedding(seed, n, d, k):
         assert np.array_equal(np.asarray(a), np.asarray(b))
 
 
+@pytest.mark.parametrize("k", [3, 9, 12])
+def test_embedding_columns_solve_the_generalised_eigenproblem(k):
+    """Each column u is a generalised eigenvector (D - W) u = lambda D u of the similarity W
+    without its diagonal (self-similarities are no edges of the graph; degrees D), the
+    eigenvalues ascending from 0 (the graph Laplacian's smallest), by ARPACK (k < n) and by
+    the dense solve that serves k >= n (here n = 12)."""
+    rng = np.random.default_rng(3)
+    t = np.linspace(0, 1, 12)[:, None]
+    X = np.hstack([np.cos(2 * t), np.sin(2 * t)]) + 0.02 * rng.normal(size=(12, 2))
+    Xd = np.gradient(X, axis=0)
+    W = pc_similarity(X, Xd)
+    np.fill_diagonal(W, 0.0)
+    D = np.diag(W.sum(axis=1))
+    U = pc_embedding(X, Xd, k, 0).maps
+    assert U.shape == (12, min(k, 12))
+    lam = np.array([u @ (D - W) @ u / (u @ D @ u) for u in U.T])
+    for u, lm in zip(U.T, lam, strict=True):
+        np.testing.assert_allclose((D - W) @ u, lm * (D @ u), atol=1e-8 * np.abs(D).max())
+    assert lam[0] == pytest.approx(0.0, abs=1e-10) and np.all(np.diff(lam) >= -1e-10)
+
+
 def test_embedding_equals_scikit_learns_on_a_lasa_shape():
     """On LASA's Angle (1,000 samples, K up to 10) the columns agree to rounding."""
     from sklearn.manifold import spectral_embedding
